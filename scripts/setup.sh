@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# One-stop setup: Debian packages (toolchain and libraries), Kokkos 3.4.1 built from
+# Debian's trilinos source package into a cache outside the clone, then the project build.
+# Every step is skipped when its result is already there, so calling it again is cheap.
+#
+# Environment:
+#   GRANULAR_CACHE   where Kokkos is cached   (default ${XDG_CACHE_HOME:-$HOME/.cache}/granular)
+#   GRANULAR_BUILD   project build directory  (default <repo>/build)
+#   GRANULAR_JOBS    parallel build jobs      (default: number of cores)
+set -euo pipefail
+
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cache=${GRANULAR_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/granular}
+build=${GRANULAR_BUILD:-$repo/build}
+jobs=${GRANULAR_JOBS:-$(nproc 2>/dev/null || echo 2)}
+kokkos_version=3.4.1
+
+say() { printf '[setup] %s\n' "$*" >&2; }
+
+as_root() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"
+  elif command -v sudo >/dev/null 2>&1; then sudo "$@"
+  else say "need root (or sudo) to run: $*"; exit 1; fi
+}
+
+# ---- 1. Debian packages ------------------------------------------------------------
+packages=(build-essential g++ cmake make pkg-config ca-certificates gnupg
+  libeigen3-dev libhdf5-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
+  libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  say "installing Debian packages: ${missing[*]}"
+  as_root apt-get update -q
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# ---- 2. Kokkos source from Debian's trilinos source package -------------------------
+# Only the source package carries Kokkos with its OpenMP backend; the binary package is
+# Serial-only. The apt sources of this machine are reused with deb -> deb-src, in a
+# private apt state so the system configuration is left untouched.
+kokkos_src=$cache/src/kokkos-$kokkos_version
+fetch_kokkos_source() {
+  [ -f "$kokkos_src/CMakeLists.txt" ] && return 0
+  local work=$cache/src/apt
+  rm -rf "$work"; mkdir -p "$work/sources.list.d" "$work/lists/partial" "$work/dl"
+  if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+    sed -E 's/^Types:.*/Types: deb-src/' /etc/apt/sources.list.d/debian.sources \
+      > "$work/sources.list.d/debian.sources"
+  fi
+  for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list; do
+    [ -f "$f" ] || continue
+    sed -nE 's/^[[:space:]]*deb(-src)?[[:space:]]+/deb-src /p' "$f" \
+      > "$work/sources.list.d/$(basename "$f" .list)-src.list"
+  done
+  for f in /etc/apt/sources.list.d/*.sources; do
+    [ -f "$f" ] && [ "$(basename "$f")" != debian.sources ] || continue
+    sed -E 's/^Types:.*/Types: deb-src/' "$f" > "$work/sources.list.d/$(basename "$f")"
+  done
+  local opts=(-o Dir::Etc::SourceList=/dev/null -o "Dir::Etc::SourceParts=$work/sources.list.d"
+    -o "Dir::State::Lists=$work/lists" -o APT::Sandbox::User=root)
+  say "fetching the trilinos source package (Kokkos $kokkos_version lives inside it)"
+  as_root apt-get "${opts[@]}" update -q >/dev/null
+  (cd "$work/dl" && as_root apt-get "${opts[@]}" source --download-only -q trilinos >/dev/null)
+  local tarball
+  tarball=$(ls "$work"/dl/trilinos_*.orig.tar.* | head -n1)
+  mkdir -p "$work/x"
+  tar -xf "$tarball" -C "$work/x" --wildcards '*/packages/kokkos/*'
+  mkdir -p "$(dirname "$kokkos_src")"
+  rm -rf "$kokkos_src"
+  mv "$work"/x/*/packages/kokkos "$kokkos_src"
+  rm -rf "$work"
+}
+
+# build_kokkos <prefix> <extra cmake args...>
+build_kokkos() {
+  local prefix=$1; shift
+  [ -f "$prefix/lib/cmake/Kokkos/KokkosConfig.cmake" ] && return 0
+  fetch_kokkos_source
+  local bdir=$prefix.build
+  rm -rf "$bdir"
+  say "building Kokkos $kokkos_version into $prefix"
+  cmake -S "$kokkos_src" -B "$bdir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_STANDARD=17 \
+    -DCMAKE_INSTALL_PREFIX="$prefix" -DCMAKE_INSTALL_LIBDIR=lib "$@" >"$bdir.log" 2>&1 ||
+    { say "Kokkos configure failed, see $bdir.log"; exit 1; }
+  cmake --build "$bdir" -j "$jobs" >>"$bdir.log" 2>&1 &&
+    cmake --install "$bdir" >>"$bdir.log" 2>&1 ||
+    { say "Kokkos build failed, see $bdir.log"; exit 1; }
+  rm -rf "$bdir"
+}
+
+kokkos_host=$cache/kokkos-$kokkos_version-openmp-serial
+build_kokkos "$kokkos_host" -DKokkos_ENABLE_OPENMP=ON -DKokkos_ENABLE_SERIAL=ON
+
+# ---- 3. The project ------------------------------------------------------------------
+if [ "${GRANULAR_SKIP_BUILD:-0}" != 1 ]; then
+  if [ ! -f "$build/CMakeCache.txt" ]; then
+    say "configuring the project in $build"
+    cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_host" >/dev/null
+  fi
+  say "building the project"
+  cmake --build "$build" -j "$jobs"
+fi
