@@ -1,0 +1,315 @@
+// Atomic output files, JSON, HDF5 (see output.hpp).
+#include "core/output.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace granular {
+namespace fs = std::filesystem;
+
+// ---- JSON --------------------------------------------------------------------------
+Json::Json(const std::vector<double>& a) : v_(Array{}) {
+  for (double d : a) std::get<Array>(v_).emplace_back(d);
+}
+
+Json& Json::operator[](const std::string& key) {
+  if (std::holds_alternative<std::nullptr_t>(v_)) v_ = Object{};
+  auto& obj = std::get<Object>(v_);
+  for (auto& [k, v] : obj)
+    if (k == key) return v;
+  obj.emplace_back(key, Json());
+  return obj.back().second;
+}
+
+void Json::push(Json value) {
+  if (std::holds_alternative<std::nullptr_t>(v_)) v_ = Array{};
+  std::get<Array>(v_).push_back(std::move(value));
+}
+
+namespace {
+void quote(std::string& out, const std::string& s) {
+  out += '"';
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  out += '"';
+}
+}  // namespace
+
+void Json::dump_to(std::string& out, int indent, int depth) const {
+  const std::string pad(indent * (depth + 1), ' '), pad_end(indent * depth, ' ');
+  const char* nl = indent ? "\n" : "";
+  if (std::holds_alternative<std::nullptr_t>(v_)) {
+    out += "null";
+  } else if (auto d = std::get_if<double>(&v_)) {
+    if (!std::isfinite(*d)) {
+      out += "null";  // JSON has no NaN/inf
+    } else {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.17g", *d);
+      out += buf;
+    }
+  } else if (auto b = std::get_if<bool>(&v_)) {
+    out += *b ? "true" : "false";
+  } else if (auto s = std::get_if<std::string>(&v_)) {
+    quote(out, *s);
+  } else if (auto r = std::get_if<Raw>(&v_)) {
+    out += r->text;
+  } else if (auto o = std::get_if<Object>(&v_)) {
+    out += "{";
+    out += nl;
+    for (size_t i = 0; i < o->size(); ++i) {
+      out += pad;
+      quote(out, (*o)[i].first);
+      out += ": ";
+      (*o)[i].second.dump_to(out, indent, depth + 1);
+      if (i + 1 < o->size()) out += ",";
+      out += nl;
+    }
+    out += pad_end + "}";
+  } else if (auto a = std::get_if<Array>(&v_)) {
+    // Arrays of numbers stay on one line: they are series, not structure.
+    out += "[";
+    for (size_t i = 0; i < a->size(); ++i) {
+      (*a)[i].dump_to(out, indent, depth + 1);
+      if (i + 1 < a->size()) out += ", ";
+    }
+    out += "]";
+  }
+}
+
+std::string Json::dump(int indent) const {
+  std::string out;
+  dump_to(out, indent, 0);
+  out += "\n";
+  return out;
+}
+
+// ---- atomic files ------------------------------------------------------------------
+std::string partial_name(const std::string& path) {
+  fs::path p(path);
+  return (p.parent_path() / ("." + p.filename().string() + ".partial")).string();
+}
+
+void commit_file(const std::string& partial, const std::string& path) {
+  std::error_code ec;
+  fs::rename(partial, path, ec);
+  if (ec) throw std::runtime_error("cannot rename " + partial + " to " + path + ": " + ec.message());
+}
+
+void make_directories(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError("cannot create output directory " + dir + ": " + ec.message());
+}
+
+void write_text_file(const std::string& path, const std::string& content) {
+  const std::string tmp = partial_name(path);
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw std::runtime_error("cannot write " + tmp);
+    f << content;
+    f.flush();
+    if (!f) throw std::runtime_error("write failed: " + tmp);
+  }
+  commit_file(tmp, path);
+}
+
+// ---- HDF5 --------------------------------------------------------------------------
+H5Writer::H5Writer(std::string path) : path_(std::move(path)), partial_(partial_name(path_)) {
+  file_ = H5Fcreate(partial_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error("cannot create HDF5 file " + partial_);
+}
+
+H5Writer::~H5Writer() {
+  if (file_ >= 0) H5Fclose(file_);
+  if (!committed_) std::remove(partial_.c_str());
+}
+
+hid_t H5Writer::group_for(const std::string& name) {
+  // Create intermediate groups; returns the file handle (paths are absolute from root).
+  size_t pos = 0;
+  while ((pos = name.find('/', pos + 1)) != std::string::npos) {
+    const std::string g = name.substr(0, pos);
+    if (H5Lexists(file_, g.c_str(), H5P_DEFAULT) <= 0) {
+      hid_t gid = H5Gcreate2(file_, g.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      if (gid < 0) throw std::runtime_error("cannot create HDF5 group " + g + " in " + partial_);
+      H5Gclose(gid);
+    }
+  }
+  return file_;
+}
+
+void H5Writer::write_raw(const std::string& name, hid_t type, const void* data,
+                         std::vector<hsize_t> dims) {
+  hid_t loc = group_for(name);
+  hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+  hid_t set = H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (set < 0) {
+    H5Sclose(space);
+    throw std::runtime_error("cannot create dataset " + name + " in " + partial_);
+  }
+  herr_t st = H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  H5Dclose(set);
+  H5Sclose(space);
+  if (st < 0) throw std::runtime_error("cannot write dataset " + name + " in " + partial_);
+}
+
+void H5Writer::write(const std::string& name, const std::vector<double>& data,
+                     std::vector<hsize_t> dims) {
+  if (dims.empty()) dims = {data.size()};
+  write_raw(name, H5T_NATIVE_DOUBLE, data.data(), dims);
+}
+
+void H5Writer::write(const std::string& name, const std::vector<int>& data,
+                     std::vector<hsize_t> dims) {
+  if (dims.empty()) dims = {data.size()};
+  write_raw(name, H5T_NATIVE_INT, data.data(), dims);
+}
+
+void H5Writer::attribute(const std::string& object, const std::string& name, double value) {
+  if (object != "/") group_for(object + "/x");
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), H5T_NATIVE_DOUBLE, space,
+                                 H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  H5Awrite(attr, H5T_NATIVE_DOUBLE, &value);
+  H5Aclose(attr);
+  H5Sclose(space);
+}
+
+void H5Writer::attribute(const std::string& object, const std::string& name,
+                         const std::string& value) {
+  if (object != "/") group_for(object + "/x");
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.size() + 1);
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), type, space, H5P_DEFAULT,
+                                 H5P_DEFAULT, H5P_DEFAULT);
+  H5Awrite(attr, type, value.c_str());
+  H5Aclose(attr);
+  H5Sclose(space);
+  H5Tclose(type);
+}
+
+void H5Writer::commit() {
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  H5Fclose(file_);
+  file_ = -1;
+  commit_file(partial_, path_);
+  committed_ = true;
+}
+
+H5Reader::H5Reader(const std::string& path) : path_(path) {
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file_ < 0) throw InputError("cannot open HDF5 file " + path);
+}
+H5Reader::~H5Reader() {
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+bool H5Reader::has(const std::string& name) const {
+  // Check each path component, as H5Lexists requires.
+  size_t pos = 0;
+  while (true) {
+    pos = name.find('/', pos + 1);
+    const std::string part = name.substr(0, pos);
+    if (H5Lexists(file_, part.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (pos == std::string::npos) return true;
+  }
+}
+
+namespace {
+template <class T>
+std::vector<T> read_all(hid_t file, const std::string& path, const std::string& name, hid_t type) {
+  hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  if (set < 0) throw InputError("HDF5 file " + path + " has no dataset " + name);
+  hid_t space = H5Dget_space(set);
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  std::vector<T> out(static_cast<size_t>(n));
+  herr_t st = H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
+  H5Sclose(space);
+  H5Dclose(set);
+  if (st < 0) throw InputError("cannot read dataset " + name + " from " + path);
+  return out;
+}
+}  // namespace
+
+std::vector<double> H5Reader::reals(const std::string& name) const {
+  return read_all<double>(file_, path_, name, H5T_NATIVE_DOUBLE);
+}
+std::vector<int> H5Reader::ints(const std::string& name) const {
+  return read_all<int>(file_, path_, name, H5T_NATIVE_INT);
+}
+double H5Reader::attribute(const std::string& object, const std::string& name) const {
+  double v = 0;
+  hid_t attr = H5Aopen_by_name(file_, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+  if (attr < 0) throw InputError("HDF5 file " + path_ + " lacks attribute " + object + "@" + name);
+  H5Aread(attr, H5T_NATIVE_DOUBLE, &v);
+  H5Aclose(attr);
+  return v;
+}
+
+// ---- XDMF --------------------------------------------------------------------------
+void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
+                         const std::string& group, int n) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
+    << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
+    << "   <Geometry GeometryType=\"XYZ\">\n"
+    << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" "
+    << "Format=\"HDF\">" << h5_name << ":" << group << "/position</DataItem>\n"
+    << "   </Geometry>\n";
+  for (const char* name : {"radius", "velocity"}) {
+    const bool vec = std::string(name) == "velocity";
+    x << "   <Attribute Name=\"" << name << "\" AttributeType=\"" << (vec ? "Vector" : "Scalar")
+      << "\" Center=\"Node\">\n    <DataItem Dimensions=\"" << n << (vec ? " 3" : "")
+      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group
+      << "/" << name << "</DataItem>\n   </Attribute>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  write_text_file(xdmf_path, x.str());
+}
+
+// ---- plots -------------------------------------------------------------------------
+bool run_plot_script(const std::string& script, const std::string& h5, const std::string& outdir) {
+  const std::string python = "/usr/bin/python3";
+  std::string dir = GRANULAR_SOURCE_DIR "/scenarios/plots";
+  if (const char* env = std::getenv("GRANULAR_PLOTS_DIR")) dir = env;
+  const std::string path = dir + "/" + script;
+  if (!fs::exists(python) || !fs::exists(path)) {
+    std::cerr << "note: charts skipped (" << (fs::exists(python) ? path : python)
+              << " not found); the data is in " << h5 << "\n";
+    return false;
+  }
+  const std::string cmd = python + " '" + path + "' '" + h5 + "' '" + outdir + "'";
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) {
+    std::cerr << "warning: plotting script " << path << " failed (exit " << rc
+              << "); the data is in " << h5 << "\n";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace granular

@@ -1,0 +1,101 @@
+// Output files that are never half-written: every file goes to a temporary name in the
+// same directory and is renamed into place only once it is complete. HDF5 (C API behind
+// RAII), a small JSON builder for summary.json, XDMF sidecars and the plotting hook.
+#pragma once
+#include <hdf5.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace granular {
+
+// ---- JSON --------------------------------------------------------------------------
+class Json {
+ public:
+  using Object = std::vector<std::pair<std::string, Json>>;  // keeps insertion order
+  using Array = std::vector<Json>;
+
+  Json() : v_(nullptr) {}
+  Json(double d) : v_(d) {}
+  Json(int i) : v_(static_cast<double>(i)) {}
+  Json(long i) : v_(static_cast<double>(i)) {}
+  Json(bool b) : v_(b) {}
+  Json(const char* s) : v_(std::string(s)) {}
+  Json(std::string s) : v_(std::move(s)) {}
+  Json(const std::vector<double>& a);
+  static Json object() { Json j; j.v_ = Object{}; return j; }
+  static Json array() { Json j; j.v_ = Array{}; return j; }
+  // Raw JSON text (already valid), e.g. a value copied from a scene file.
+  static Json raw(std::string text) { Json j; j.v_ = Raw{std::move(text)}; return j; }
+
+  Json& operator[](const std::string& key);  // object member, created on first use
+  void push(Json value);                     // array element
+  std::string dump(int indent = 2) const;
+
+ private:
+  struct Raw { std::string text; };
+  void dump_to(std::string& out, int indent, int depth) const;
+  std::variant<std::nullptr_t, double, bool, std::string, Object, Array, Raw> v_;
+};
+
+// ---- atomic files ------------------------------------------------------------------
+// "<dir>/.<name>.partial", renamed to "<dir>/<name>" by commit.
+std::string partial_name(const std::string& path);
+void commit_file(const std::string& partial, const std::string& path);
+void write_text_file(const std::string& path, const std::string& content);
+void make_directories(const std::string& dir);
+
+// ---- HDF5 --------------------------------------------------------------------------
+class H5Writer {
+ public:
+  explicit H5Writer(std::string path);  // writes to partial_name(path)
+  ~H5Writer();                          // removes the partial file unless committed
+  H5Writer(const H5Writer&) = delete;
+  H5Writer& operator=(const H5Writer&) = delete;
+
+  // Dataset "group/sub/name"; groups are created on demand. dims empty = 1-D of data.size().
+  void write(const std::string& name, const std::vector<double>& data,
+             std::vector<hsize_t> dims = {});
+  void write(const std::string& name, const std::vector<int>& data,
+             std::vector<hsize_t> dims = {});
+  void attribute(const std::string& object, const std::string& name, double value);
+  void attribute(const std::string& object, const std::string& name, const std::string& value);
+  void commit();  // close and rename into place
+
+ private:
+  hid_t group_for(const std::string& dataset_name);
+  void write_raw(const std::string& name, hid_t type, const void* data, std::vector<hsize_t> dims);
+  std::string path_, partial_;
+  hid_t file_ = -1;
+  bool committed_ = false;
+};
+
+class H5Reader {
+ public:
+  explicit H5Reader(const std::string& path);
+  ~H5Reader();
+  H5Reader(const H5Reader&) = delete;
+  H5Reader& operator=(const H5Reader&) = delete;
+  bool has(const std::string& name) const;
+  std::vector<double> reals(const std::string& name) const;
+  std::vector<int> ints(const std::string& name) const;
+  double attribute(const std::string& object, const std::string& name) const;
+
+ private:
+  std::string path_;
+  hid_t file_ = -1;
+};
+
+// XDMF sidecar so ParaView opens a particle snapshot stored in an HDF5 file:
+// datasets <group>/position (n x 3), <group>/radius, <group>/velocity.
+void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
+                         const std::string& group, int n);
+
+// Runs scenarios/plots/<script> with Debian's python3 on <h5> into <outdir>.
+// A missing interpreter or a failing script is reported, not fatal: the data is kept.
+bool run_plot_script(const std::string& script, const std::string& h5, const std::string& outdir);
+
+}  // namespace granular

@@ -1,0 +1,86 @@
+// Particle store: one Kokkos View per field (structure of arrays), templated on the
+// execution space so the same store lives in host or device memory.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace granular {
+
+// Plain host-side description of a packing, used by generators, readers and tests.
+struct HostParticles {
+  std::vector<double> x, y, z;     // positions
+  std::vector<double> vx, vy, vz;  // velocities
+  std::vector<double> radius;
+  std::vector<double> density;  // per particle, so mass = density * 4/3 pi a^3
+  std::vector<int> species;
+  int size() const { return static_cast<int>(radius.size()); }
+  void resize(int n) {
+    for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &radius, &density}) v->assign(n, 0.0);
+    species.assign(n, 0);
+  }
+};
+
+template <class ExecSpace>
+struct Particles {
+  using execution_space = ExecSpace;
+  using memory_space = typename ExecSpace::memory_space;
+  using vec_view = Kokkos::View<double* [3], memory_space>;
+  using scalar_view = Kokkos::View<double*, memory_space>;
+  using int_view = Kokkos::View<int*, memory_space>;
+
+  int n = 0;
+  vec_view x, v, w, f, torque;  // position, velocity, angular velocity, force, torque
+  scalar_view radius, mass, inertia;
+  int_view species;
+  int_view id;  // stable identity (input order), survives any reordering of the arrays
+
+  Particles() = default;
+  explicit Particles(int n_) : n(n_) {
+    x = vec_view("particles::x", n);
+    v = vec_view("particles::v", n);
+    w = vec_view("particles::w", n);
+    f = vec_view("particles::f", n);
+    torque = vec_view("particles::torque", n);
+    radius = scalar_view("particles::radius", n);
+    mass = scalar_view("particles::mass", n);
+    inertia = scalar_view("particles::inertia", n);
+    species = int_view("particles::species", n);
+    id = int_view("particles::id", n);
+  }
+
+  static Particles from_host(const HostParticles& h) {
+    const int n = h.size();
+    Particles p(n);
+    auto x = Kokkos::create_mirror_view(p.x);
+    auto v = Kokkos::create_mirror_view(p.v);
+    auto r = Kokkos::create_mirror_view(p.radius);
+    auto m = Kokkos::create_mirror_view(p.mass);
+    auto in = Kokkos::create_mirror_view(p.inertia);
+    auto s = Kokkos::create_mirror_view(p.species);
+    auto id = Kokkos::create_mirror_view(p.id);
+    for (int i = 0; i < n; ++i) {
+      x(i, 0) = h.x[i], x(i, 1) = h.y[i], x(i, 2) = h.z[i];
+      v(i, 0) = h.vx[i], v(i, 1) = h.vy[i], v(i, 2) = h.vz[i];
+      r(i) = h.radius[i];
+      if (!(h.radius[i] > 0) || !(h.density[i] > 0))
+        throw InputError("particle " + std::to_string(i) + " has a non-positive radius or density");
+      m(i) = h.density[i] * 4.0 / 3.0 * M_PI * h.radius[i] * h.radius[i] * h.radius[i];
+      in(i) = 0.4 * m(i) * h.radius[i] * h.radius[i];
+      s(i) = h.species[i];
+      id(i) = i;
+    }
+    Kokkos::deep_copy(p.x, x);
+    Kokkos::deep_copy(p.v, v);
+    Kokkos::deep_copy(p.radius, r);
+    Kokkos::deep_copy(p.mass, m);
+    Kokkos::deep_copy(p.inertia, in);
+    Kokkos::deep_copy(p.species, s);
+    Kokkos::deep_copy(p.id, id);
+    return p;
+  }
+};
+
+}  // namespace granular

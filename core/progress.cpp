@@ -1,0 +1,47 @@
+// Terminal progress (see progress.hpp).
+#include "core/progress.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace granular {
+
+Progress::Progress(std::string phase, long total_steps, bool enabled)
+    : phase_(std::move(phase)),
+      total_(total_steps > 0 ? total_steps : 1),
+      enabled_(enabled),
+      tty_(isatty(fileno(stderr)) != 0),
+      start_(std::chrono::steady_clock::now()),
+      last_draw_(start_) {}
+
+Progress::~Progress() { finish(); }
+
+void Progress::update(long step, const std::string& extra) {
+  if (!enabled_ || done_) return;
+  const auto now = std::chrono::steady_clock::now();
+  const int decile = static_cast<int>(10 * step / total_);
+  if (tty_) {
+    if (now - last_draw_ < std::chrono::milliseconds(250) && step < total_) return;
+  } else if (decile == last_decile_) {
+    return;
+  }
+  last_draw_ = now;
+  last_decile_ = decile;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const double eta = step > 0 ? elapsed * (total_ - step) / step : 0.0;
+  std::fprintf(stderr, "%s[%s] step %ld/%ld (%3.0f%%) elapsed %.0fs ETA %.0fs %s%s",
+               tty_ ? "\r\033[K" : "", phase_.c_str(), step, total_, 100.0 * step / total_,
+               elapsed, eta, extra.c_str(), tty_ ? "" : "\n");
+  std::fflush(stderr);
+}
+
+void Progress::finish() {
+  if (!enabled_ || done_) return;
+  done_ = true;
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::fprintf(stderr, "%s[%s] done in %.1fs\n", tty_ ? "\r\033[K" : "", phase_.c_str(), elapsed);
+}
+
+}  // namespace granular

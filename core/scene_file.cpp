@@ -1,0 +1,164 @@
+// Strict TOML scene reader (see scene_file.hpp).
+#include "core/scene_file.hpp"
+
+#include <sstream>
+
+namespace granular {
+
+namespace {
+std::string format_real(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+}  // namespace
+
+SceneFile SceneFile::load(const std::string& path) {
+  SceneFile s;
+  s.path_ = path;
+  try {
+    s.root_ = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream msg;
+    msg << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+        << e.description();
+    throw InputError(msg.str());
+  }
+  return s;
+}
+
+SceneFile SceneFile::parse(const std::string& text, const std::string& source_name) {
+  SceneFile s;
+  s.path_ = source_name;
+  try {
+    s.root_ = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(source_name + ": " + std::string(e.description()));
+  }
+  return s;
+}
+
+const toml::node* SceneFile::find(const std::string& key) const {
+  return root_.at_path(key).node();
+}
+
+void SceneFile::fail(const std::string& key, const std::string& what) const {
+  throw InputError("scene file " + path_ + ": key '" + key + "' " + what);
+}
+
+void SceneFile::require(bool ok, const std::string& key, const std::string& what) const {
+  if (!ok) fail(key, what);
+}
+
+void SceneFile::note(const std::string& key, const std::string& value) const {
+  used_[key] = value;
+}
+
+bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
+
+double SceneFile::real(const std::string& key) const {
+  const toml::node* n = find(key);
+  if (!n) fail(key, "is missing (a number is required)");
+  if (auto v = n->value<double>()) {  // integers convert too
+    note(key, format_real(*v));
+    return *v;
+  }
+  fail(key, "must be a number");
+}
+
+long SceneFile::integer(const std::string& key) const {
+  const toml::node* n = find(key);
+  if (!n) fail(key, "is missing (an integer is required)");
+  if (auto v = n->value_exact<int64_t>()) {
+    note(key, std::to_string(*v));
+    return static_cast<long>(*v);
+  }
+  fail(key, "must be an integer");
+}
+
+std::string SceneFile::text(const std::string& key) const {
+  const toml::node* n = find(key);
+  if (!n) fail(key, "is missing (a string is required)");
+  if (auto v = n->value_exact<std::string>()) {
+    note(key, "\"" + *v + "\"");
+    return *v;
+  }
+  fail(key, "must be a string");
+}
+
+bool SceneFile::flag(const std::string& key) const {
+  const toml::node* n = find(key);
+  if (!n) fail(key, "is missing (true or false is required)");
+  if (auto v = n->value_exact<bool>()) {
+    note(key, *v ? "true" : "false");
+    return *v;
+  }
+  fail(key, "must be true or false");
+}
+
+std::vector<double> SceneFile::reals(const std::string& key) const {
+  const toml::node* n = find(key);
+  if (!n) fail(key, "is missing (an array of numbers is required)");
+  const toml::array* a = n->as_array();
+  if (!a) fail(key, "must be an array of numbers");
+  std::vector<double> out;
+  std::string text = "[";
+  for (const auto& e : *a) {
+    auto v = e.value<double>();
+    if (!v) fail(key, "must contain only numbers");
+    out.push_back(*v);
+    text += (out.size() > 1 ? ", " : "") + format_real(*v);
+  }
+  if (out.empty()) fail(key, "must not be empty");
+  note(key, text + "]");
+  return out;
+}
+
+double SceneFile::real(const std::string& key, double def) const {
+  if (find(key)) return real(key);
+  note(key, format_real(def));
+  return def;
+}
+long SceneFile::integer(const std::string& key, long def) const {
+  if (find(key)) return integer(key);
+  note(key, std::to_string(def));
+  return def;
+}
+std::string SceneFile::text(const std::string& key, const std::string& def) const {
+  if (find(key)) return text(key);
+  note(key, "\"" + def + "\"");
+  return def;
+}
+bool SceneFile::flag(const std::string& key, bool def) const {
+  if (find(key)) return flag(key);
+  note(key, def ? "true" : "false");
+  return def;
+}
+std::vector<double> SceneFile::reals(const std::string& key, const std::vector<double>& def) const {
+  if (find(key)) return reals(key);
+  std::string text = "[";
+  for (size_t i = 0; i < def.size(); ++i) text += (i ? ", " : "") + format_real(def[i]);
+  note(key, text + "]");
+  return def;
+}
+
+void SceneFile::reject_unknown_keys() const {
+  // Walk every leaf of the file; a leaf (or a whole table) that no reader touched is unknown.
+  std::vector<std::pair<std::string, const toml::table*>> stack{{"", &root_}};
+  while (!stack.empty()) {
+    auto [prefix, table] = stack.back();
+    stack.pop_back();
+    for (const auto& [k, node] : *table) {
+      const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+      if (const toml::table* sub = node.as_table()) {
+        stack.emplace_back(key, sub);
+      } else if (!used_.count(key)) {
+        throw InputError("scene file " + path_ + ": unknown key '" + key +
+                         "' (misspelt, or not used by this scene)");
+      }
+    }
+  }
+}
+
+}  // namespace granular

@@ -1,0 +1,58 @@
+// Scene (scenario) files: TOML with strict key checking. Every key a scene reads is
+// recorded; keys that nobody read are reported as unknown, naming the key and the file.
+#pragma once
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#define TOML_EXCEPTIONS 1
+#include <toml++/toml.h>
+
+#include "core/error.hpp"
+
+namespace granular {
+
+class SceneFile {
+ public:
+  static SceneFile load(const std::string& path);
+  static SceneFile parse(const std::string& text, const std::string& source_name);
+
+  const std::string& path() const { return path_; }
+
+  // Required values: a missing key or a value of the wrong type is an InputError.
+  double real(const std::string& key) const;
+  long integer(const std::string& key) const;
+  std::string text(const std::string& key) const;
+  bool flag(const std::string& key) const;
+  std::vector<double> reals(const std::string& key) const;
+
+  // Optional values with defaults (the default is recorded as the value used).
+  double real(const std::string& key, double def) const;
+  long integer(const std::string& key, long def) const;
+  std::string text(const std::string& key, const std::string& def) const;
+  bool flag(const std::string& key, bool def) const;
+  std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
+  bool has(const std::string& key) const;
+
+  // Throws naming the first key present in the file that no reader asked for.
+  void reject_unknown_keys() const;
+
+  // Every value read so far (key -> value as text), for summary.json.
+  const std::map<std::string, std::string>& used() const { return used_; }
+
+  // A range check with the same style of message.
+  void require(bool ok, const std::string& key, const std::string& what) const;
+
+ private:
+  const toml::node* find(const std::string& key) const;
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  void note(const std::string& key, const std::string& value) const;
+
+  std::string path_;
+  toml::table root_;
+  mutable std::map<std::string, std::string> used_;
+};
+
+}  // namespace granular
