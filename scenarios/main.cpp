@@ -1,0 +1,106 @@
+// The `granular` command line: run a scene, print versions.
+#include <CLI/CLI.hpp>
+#include <Kokkos_Core.hpp>
+#include <filesystem>
+#include <iostream>
+
+#include "core/error.hpp"
+#include "core/scene_file.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace {
+
+std::string backends() {
+  std::string b;
+#ifdef KOKKOS_ENABLE_CUDA
+  b += " CUDA";
+#endif
+#ifdef KOKKOS_ENABLE_OPENMP
+  b += " OpenMP";
+#endif
+#ifdef KOKKOS_ENABLE_SERIAL
+  b += " Serial";
+#endif
+  return b.empty() ? b : b.substr(1);
+}
+
+std::string version_line() {
+  const int v = KOKKOS_VERSION;
+  return std::string("granular ") + GRANULAR_VERSION + "\nkokkos " + std::to_string(v / 10000) +
+         "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
+         " backends: " + backends() + "\ndefault execution space: " +
+         Kokkos::DefaultExecutionSpace::name();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"granular: elasticity and wave propagation of granular materials"};
+  app.require_subcommand(0, 1);
+  bool show_version = false;
+  app.add_flag("--version", show_version, "print project and Kokkos versions and backends");
+
+  auto* run = app.add_subcommand("run", "run a scene file");
+  std::string scene_path, out_dir;
+  int threads = 0;
+  bool quiet = false, resume = false;
+  run->add_option("scene", scene_path, "scene file (TOML)")->required()->check(CLI::ExistingFile);
+  run->add_option("--out", out_dir, "output directory (default out/<scene file name>)");
+  run->add_option("--threads", threads, "host threads (default: all cores)")->check(CLI::PositiveNumber);
+  run->add_flag("--quiet", quiet, "no progress lines");
+  run->add_flag("--resume", resume, "continue from the checkpoint in the output directory");
+
+  auto* list = app.add_subcommand("scenes", "list the scene drivers");
+
+  CLI11_PARSE(app, argc, argv);
+  if (show_version) {
+    std::cout << version_line() << "\n";
+    return 0;
+  }
+  if (list->parsed()) {
+    for (const auto& e : granular::scene_registry()) std::cout << e.name << "\t" << e.description << "\n";
+    return 0;
+  }
+  if (!run->parsed()) {
+    std::cout << app.help();
+    return 0;
+  }
+
+  Kokkos::InitArguments args;
+  args.num_threads = threads > 0 ? threads : -1;
+  args.disable_warnings = true;  // OMP_PROC_BIND advice is for benchmarks, not for users
+  Kokkos::initialize(args);
+  int rc = 0;
+  try {
+    auto scene = granular::SceneFile::load(scene_path);
+    const std::string name = scene.text("scene");
+    granular::RunOptions opts;
+    opts.out_dir = out_dir.empty()
+                       ? "out/" + std::filesystem::path(scene_path).stem().string()
+                       : out_dir;
+    opts.progress = !quiet;
+    opts.resume = resume;
+    const granular::SceneEntry* entry = nullptr;
+    for (const auto& e : granular::scene_registry())
+      if (name == e.name) entry = &e;
+    if (!entry) {
+      std::string known;
+      for (const auto& e : granular::scene_registry()) known += std::string(" ") + e.name;
+      throw granular::InputError("scene file " + scene_path + ": key 'scene' names an unknown scene '" +
+                                 name + "' (known:" + known + ")");
+    }
+    entry->run(scene, opts);
+    std::cout << "results in " << opts.out_dir << "\n";
+  } catch (const granular::InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    rc = 2;
+  } catch (const granular::PhysicsError& e) {
+    std::cerr << "stopped: " << e.what() << "\n";
+    rc = 3;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    rc = 1;
+  }
+  Kokkos::finalize();
+  return rc;
+}

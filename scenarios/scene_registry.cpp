@@ -1,0 +1,16 @@
+// Table of scene drivers known to the CLI.
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+const std::vector<SceneEntry>& scene_registry() {
+  static const std::vector<SceneEntry> entries = {
+      {"two_particle_linear", "head-on collisions of two spheres, linear spring-dashpot",
+       run_two_particle_linear},
+      {"isotropic_compression", "isotropic compression of a polydisperse gas to a dense packing",
+       run_isotropic_compression},
+  };
+  return entries;
+}
+
+}  // namespace granular

@@ -1,0 +1,30 @@
+// The scenes the CLI can run: a scene file's top-level `scene = "<name>"` picks the driver.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/scene_file.hpp"
+
+namespace granular {
+
+struct RunOptions {
+  std::string out_dir;    // every output file of the run goes here
+  bool progress = true;   // progress lines on stderr
+  bool resume = false;    // continue from <out_dir>/checkpoint.h5 when the scene supports it
+};
+
+using SceneRunner = void (*)(const SceneFile&, const RunOptions&);
+
+struct SceneEntry {
+  const char* name;
+  const char* description;
+  SceneRunner run;
+};
+
+const std::vector<SceneEntry>& scene_registry();
+
+// Scene drivers (one per scenes/*.cpp file).
+void run_two_particle_linear(const SceneFile&, const RunOptions&);
+void run_isotropic_compression(const SceneFile&, const RunOptions&);
+
+}  // namespace granular
