@@ -6,11 +6,6 @@
 
 namespace granular::testing {
 
-template <class... Spaces>
-struct SpaceList {
-  using type = ::testing::Types<Spaces...>;
-};
-
 using ExecSpaces = ::testing::Types<
 #ifdef KOKKOS_ENABLE_OPENMP
     Kokkos::OpenMP
