@@ -23,8 +23,8 @@ struct SceneEntry {
 
 const std::vector<SceneEntry>& scene_registry();
 
-// Scene drivers (one per scenes/*.cpp file).
-void run_two_particle_linear(const SceneFile&, const RunOptions&);
-void run_isotropic_compression(const SceneFile&, const RunOptions&);
+// Scene drivers (one per scenarios/scene_*.cpp file).
+// DEM scenes
+// chain scenes
 
 }  // namespace granular
