@@ -6,6 +6,10 @@ namespace granular {
 const std::vector<SceneEntry>& scene_registry() {
   static const std::vector<SceneEntry> entries = {
       // DEM scenes
+      {"two_particle_linear", "head-on collisions of two spheres, linear spring-dashpot",
+       run_two_particle_linear},
+      {"isotropic_compression", "isotropic compression of a polydisperse gas to a dense packing",
+       run_isotropic_compression},
       // chain scenes
   };
   return entries;

@@ -25,6 +25,8 @@ const std::vector<SceneEntry>& scene_registry();
 
 // Scene drivers (one per scenarios/scene_*.cpp file).
 // DEM scenes
+void run_two_particle_linear(const SceneFile&, const RunOptions&);
+void run_isotropic_compression(const SceneFile&, const RunOptions&);
 // chain scenes
 
 }  // namespace granular

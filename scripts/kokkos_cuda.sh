@@ -13,7 +13,8 @@
 #
 # Kokkos 3.4.1 predates CUDA 13, so a copy of the source is patched (the cached source used
 # by the host build stays untouched). There is no Hopper (sm_90) arch option in 3.4.1;
-# the sm_80 code carries PTX, which the driver JIT-compiles on H100/H200.
+# the sm_80 code carries PTX, which the driver JIT-compiles on H100/H200 (edit 4 below
+# lets Kokkos accept that instead of aborting at initialize).
 
 # ---- fallbacks when run standalone (setup.sh defines all of these) -------------------
 if [ -z "${cache:-}" ]; then
@@ -60,6 +61,16 @@ prepare_kokkos_cuda_source() {
   perl -0pi -e 's/cudaMemPrefetchAsync\(ptr, bytes, space\.cuda_device\(\),\s*space\.cuda_stream\(\)\)/cudaMemPrefetchAsync(ptr, bytes,\n        cudaMemLocation{cudaMemLocationTypeDevice, space.cuda_device()}, 0,\n        space.cuda_stream())/' "$space"
   grep -q 'cudaMemLocation{cudaMemLocationTypeDevice, space.cuda_device()}, 0' "$space" ||
     { say "Kokkos_CudaSpace.cpp: cudaMemPrefetchAsync edit did not apply"; return 1; }
+
+  # 4. Not a CUDA 13 issue: Kokkos 3.4.1 aborts at start-up whenever the compiled major
+  #    arch differs from the device's ("compute capability 8.0 on device with compute
+  #    capability 9.0 is not supported"), although the sm_80 PTX in the binary is JIT-
+  #    compiled and runs fine on H100/H200 (sm_90). Abort only when the binary targets a
+  #    newer arch than the device; the warning Kokkos prints right after stays.
+  local inst=$dst/core/src/Cuda/Kokkos_Cuda_Instance.cpp
+  sed -i 's/^\( *\)if (compiled_major != cudaProp.major || compiled_minor > cudaProp.minor) {$/\1if (compiled_major > cudaProp.major ||\n\1    (compiled_major == cudaProp.major \&\& compiled_minor > cudaProp.minor)) {/' "$inst"
+  grep -q '^ *if (compiled_major > cudaProp.major ||$' "$inst" ||
+    { say "Kokkos_Cuda_Instance.cpp: arch check edit did not apply"; return 1; }
 
   touch "$dst/.cuda13-patched"
 }

@@ -1,0 +1,161 @@
+// A DEM system: particles in a periodic (optionally deforming) box, a neighbour list and
+// a contact model, advanced by velocity Verlet. Owns the physical-safety guards: the time
+// step against the shortest collision, NaN, runaway overlap and runaway energy.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "core/box.hpp"
+#include "core/error.hpp"
+#include "core/particles.hpp"
+#include "kernels/contact_forces.hpp"
+#include "kernels/integrator.hpp"
+#include "kernels/measure.hpp"
+#include "kernels/neighbor_list.hpp"
+#include "kernels/strain.hpp"
+
+namespace granular {
+
+struct DemParams {
+  double dt = 0.0;
+  double skin = 0.0;
+  Damping damping;
+  int rattler_threshold = 3;
+  double max_overlap = 0.3;  // delta / min(a_i, a_j) above which the run is stopped
+  double dt_guard = 0.1;     // dt must not exceed this fraction of the shortest collision
+};
+
+template <class ExecSpace, class Model>
+class DemSystem {
+ public:
+  DemSystem(Particles<ExecSpace> particles, const PeriodicBox& box, const Model& model,
+            const DemParams& params)
+      : p_(std::move(particles)), box_(box), model_(model), params_(params), nl_(params.skin) {
+    if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
+    check_time_step();
+    auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
+    for (int i = 0; i < p_.n; ++i) {
+      particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
+      a_min_ = std::min(a_min_, radius(i));
+    }
+    wrap_positions();
+    nl_.build(p_, box_);
+    compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
+  }
+
+  // Advances n steps of velocity Verlet with the current strain rate.
+  void step(long n) {
+    const double dt = params_.dt;
+    const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
+    for (long s = 0; s < n; ++s) {
+      const double max_sq = kick_drift(p_, box_, nl_.reference(), dt);
+      if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
+      if (nl_.needs_rebuild(max_sq, box_)) nl_.build(p_, box_);
+      compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
+      kick(p_, dt);
+      time_ += dt;
+      ++steps_;
+    }
+  }
+
+  void set_strain_rate(double ex, double ey, double ez) {
+    rate_[0] = ex, rate_[1] = ey, rate_[2] = ez;
+  }
+  // Forces depend on velocities (damping): recompute after external edits of the state.
+  void refresh_forces() { compute_forces(p_, nl_, box_, model_, params_.damping, rate_); }
+  void rebuild() { nl_.build(p_, box_); }
+
+  Measurements measure() const {
+    return granular::measure(p_, nl_, box_, model_, params_.rattler_threshold, particle_volume_);
+  }
+
+  // Stops the run with a message that says what to change.
+  void check_health(const Measurements& m) const {
+    std::ostringstream msg;
+    msg.precision(4);
+    if (!std::isfinite(m.ekin) || !std::isfinite(m.epot) || !std::isfinite(m.pressure)) {
+      msg << "non-finite energy or stress at t = " << time_ << " (step " << steps_
+          << "): the integration diverged; reduce dt (now " << params_.dt << ")";
+      throw PhysicsError(msg.str());
+    }
+    if (m.max_overlap > params_.max_overlap) {
+      msg << "runaway overlap at t = " << time_ << " (step " << steps_ << "): delta/a = "
+          << m.max_overlap << " exceeds the limit " << params_.max_overlap
+          << " of binary contact laws; reduce the strain rate, the final volume fraction, the"
+          << " initial velocities or dt";
+      throw PhysicsError(msg.str());
+    }
+    // Kinetic energy per particle that could drive an overlap beyond the limit on impact.
+    const double e_limit = 0.5 * model_.stiffness() * std::pow(params_.max_overlap * a_min_, 2);
+    if (p_.n > 0 && m.ekin / p_.n > e_limit) {
+      msg << "runaway kinetic energy at t = " << time_ << " (step " << steps_
+          << "): " << m.ekin / p_.n << " per particle exceeds " << e_limit
+          << ", the energy of a limit overlap; reduce dt, the strain rate or the initial"
+          << " velocities, or raise the damping";
+      throw PhysicsError(msg.str());
+    }
+  }
+
+  Particles<ExecSpace>& particles() { return p_; }
+  const Particles<ExecSpace>& particles() const { return p_; }
+  const PeriodicBox& box() const { return box_; }
+  const NeighborList<ExecSpace>& neighbor_list() const { return nl_; }
+  const Model& model() const { return model_; }
+  const DemParams& params() const { return params_; }
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  void set_clock(double t, long steps) { time_ = t, steps_ = steps; }
+  double particle_volume() const { return particle_volume_; }
+
+ private:
+  // Inputs (data files, checkpoints) may hold positions outside the primary box.
+  void wrap_positions() {
+    auto x = p_.x;
+    const PeriodicBox b = box_;
+    Kokkos::parallel_for(
+        "dem::DemSystem::wrap", Kokkos::RangePolicy<ExecSpace>(0, p_.n), KOKKOS_LAMBDA(const int i) {
+          for (int d = 0; d < 3; ++d) {
+            double xd = x(i, d);
+            const double l = b.len[d];
+            xd -= l * Kokkos::Experimental::floor((xd - b.lo[d]) / l);
+            x(i, d) = xd < b.lo[d] + l ? xd : b.lo[d];  // round-off can land exactly on the face
+          }
+        });
+  }
+
+  // The stiffest, lightest pair sets the shortest collision; dt must resolve it.
+  void check_time_step() const {
+    if (p_.n < 2) return;
+    auto mass = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.mass);
+    std::vector<double> m(mass.data(), mass.data() + p_.n);
+    std::partial_sort(m.begin(), m.begin() + 2, m.end());
+    const double m_red = m[0] * m[1] / (m[0] + m[1]);
+    const double tc = model_.shortest_duration(m_red);
+    if (params_.dt > params_.dt_guard * tc) {
+      std::ostringstream msg;
+      msg.precision(4);
+      msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard
+          << " = " << params_.dt_guard * tc << " for the stiffest, lightest pair (stiffness "
+          << model_.stiffness() << ", reduced mass " << m_red << ", contact duration " << tc
+          << "): set dt <= " << params_.dt_guard * tc << " (t_c/50 = " << tc / 50
+          << " is the usual choice)";
+      throw PhysicsError(msg.str());
+    }
+  }
+
+  Particles<ExecSpace> p_;
+  PeriodicBox box_;
+  Model model_;
+  DemParams params_;
+  NeighborList<ExecSpace> nl_;
+  double rate_[3] = {0, 0, 0};
+  double time_ = 0.0;
+  long steps_ = 0;
+  double particle_volume_ = 0.0;
+  double a_min_ = 1e300;
+};
+
+}  // namespace granular

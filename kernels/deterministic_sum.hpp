@@ -1,0 +1,38 @@
+// Reductions whose result does not depend on the thread count: values are summed in fixed
+// blocks of consecutive indices (each block by one thread, in index order) and the block
+// sums are then added on the host in block order. Used for every diagnostic (energies,
+// stress, coordination) so runs with 1 and 2 threads print identical numbers.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <array>
+#include <string>
+
+namespace granular {
+
+// Sums columns of a (n x NC) View. The block size is a constant, not a function of the
+// number of threads, which is what makes the result reproducible.
+template <int NC, class ExecSpace, class View2D>
+std::array<double, NC> deterministic_column_sums(const View2D& values, int n) {
+  constexpr int block = 256;
+  const int nblocks = (n + block - 1) / block;
+  using mem = typename ExecSpace::memory_space;
+  Kokkos::View<double**, Kokkos::LayoutRight, mem> partial("reduce::partial", nblocks, NC);
+  Kokkos::parallel_for(
+      "reduce::deterministic::blocks", Kokkos::RangePolicy<ExecSpace>(0, nblocks),
+      KOKKOS_LAMBDA(const int b) {
+        const int begin = b * block;
+        const int end = begin + block < n ? begin + block : n;
+        for (int c = 0; c < NC; ++c) {
+          double s = 0.0;
+          for (int i = begin; i < end; ++i) s += values(i, c);
+          partial(b, c) = s;
+        }
+      });
+  auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), partial);
+  std::array<double, NC> out{};
+  for (int b = 0; b < nblocks; ++b)
+    for (int c = 0; c < NC; ++c) out[c] += host(b, c);
+  return out;
+}
+
+}  // namespace granular

@@ -1,0 +1,232 @@
+// Linked-cell binning and a size-aware Verlet neighbour list with a skin (full list, CSR).
+//
+// Full list (each pair stored for both particles) so that every particle sums its own
+// forces in a fixed order: no atomics, no scatter buffers, and results that are bitwise
+// identical for any thread count and on any backend. The order inside a cell is sorted
+// by particle index for the same reason.
+//
+// The list is rebuilt only when it may have become wrong: some particle moved more than
+// half the skin since the build, counting both its own motion and the affine shrinking of
+// the box (a compressed box brings distant pairs closer without moving them "relative to
+// the box").
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
+
+#include "core/box.hpp"
+#include "core/error.hpp"
+#include "core/particles.hpp"
+
+namespace granular {
+
+// Visits every j within a_i + a_j + skin of particle i, in a fixed order (cell offsets in
+// z, y, x order, then index order inside each cell). A functor rather than a lambda so it
+// is callable from device code with a generic callback.
+template <class ExecSpace>
+struct CellVisitor {
+  using mem = typename ExecSpace::memory_space;
+  Kokkos::View<double* [3], mem> x;
+  Kokkos::View<double*, mem> radius;
+  Kokkos::View<int*, mem> cell_of, cell_start, cell_particles;
+  PeriodicBox box;
+  double skin;
+  int ncx, ncy, ncz;
+
+  template <class F>
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, F&& on_neighbor) const {
+    const int c = cell_of(i);
+    const int cx = c % ncx, cy = (c / ncx) % ncy, cz = c / (ncx * ncy);
+    // Offsets {-1,0,1} per axis, or fewer when the axis has < 3 cells, so that no cell is
+    // visited twice.
+    const int lox = ncx >= 3 ? -1 : 0, hix = ncx >= 2 ? 1 : 0;
+    const int loy = ncy >= 3 ? -1 : 0, hiy = ncy >= 2 ? 1 : 0;
+    const int loz = ncz >= 3 ? -1 : 0, hiz = ncz >= 2 ? 1 : 0;
+    const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2), ai = radius(i);
+    for (int dz = loz; dz <= hiz; ++dz) {
+      const int zz = (cz + dz + ncz) % ncz;
+      for (int dy = loy; dy <= hiy; ++dy) {
+        const int yy = (cy + dy + ncy) % ncy;
+        for (int dx = lox; dx <= hix; ++dx) {
+          const int xx = (cx + dx + ncx) % ncx;
+          const int cc = (zz * ncy + yy) * ncx + xx;
+          for (int s = cell_start(cc); s < cell_start(cc + 1); ++s) {
+            const int j = cell_particles(s);
+            if (j == i) continue;
+            const double rx = box.min_image(xi - x(j, 0), 0);
+            const double ry = box.min_image(yi - x(j, 1), 1);
+            const double rz = box.min_image(zi - x(j, 2), 2);
+            const double cut = ai + radius(j) + skin;
+            if (rx * rx + ry * ry + rz * rz < cut * cut) on_neighbor(j);
+          }
+        }
+      }
+    }
+  }
+};
+
+template <class ExecSpace>
+class NeighborList {
+ public:
+  using exec = ExecSpace;
+  using mem = typename ExecSpace::memory_space;
+  using int_view = Kokkos::View<int*, mem>;
+
+  explicit NeighborList(double skin = 0.0) : skin_(skin) {}
+
+  double skin() const { return skin_; }
+  int num_entries() const { return num_entries_; }  // = 2 x number of pairs
+  long builds() const { return builds_; }
+  const int_view& offsets() const { return offsets_; }      // n + 1
+  const int_view& neighbors() const { return neighbors_; }  // offsets(n)
+
+  // Build from scratch. Records the reference positions and box for the skin criterion.
+  void build(const Particles<ExecSpace>& p, const PeriodicBox& box);
+
+  // True when the list may miss a pair: 2 * max displacement since the build, plus the
+  // affine shrinkage of the cutoff sphere, exceeds the skin.
+  bool needs_rebuild(double max_disp_sq, const PeriodicBox& box) const {
+    double shrink = 1.0;
+    for (int d = 0; d < 3; ++d) shrink = std::min(shrink, box.len[d] / built_len_[d]);
+    const double lost = 2.0 * std::sqrt(max_disp_sq) + (1.0 - shrink) * (2.0 * a_max_ + skin_);
+    return lost >= skin_;
+  }
+  // Reference positions at the last build, moved affinely with the box (strain kernel).
+  const typename Particles<ExecSpace>::vec_view& reference() const { return x_ref_; }
+
+ private:
+  double skin_;
+  int num_entries_ = 0;
+  long builds_ = 0;
+  double a_max_ = 0.0;
+  double built_len_[3] = {1, 1, 1};
+  int_view offsets_, neighbors_;
+  int_view cell_of_, cell_start_, cell_count_, cell_particles_;
+  typename Particles<ExecSpace>::vec_view x_ref_;
+};
+
+template <class ExecSpace>
+void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const PeriodicBox& box) {
+  const int n = p.n;
+  auto radius = p.radius;
+  auto x = p.x;
+
+  double a_max = 0.0;
+  Kokkos::parallel_reduce(
+      "neighbor::NeighborList::max_radius", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i, double& m) { m = radius(i) > m ? radius(i) : m; },
+      Kokkos::Max<double>(a_max));
+  a_max_ = a_max;
+  const double rc = 2.0 * a_max + skin_;
+
+  // Cell grid: cells no smaller than the cutoff. The minimum image is unique only when
+  // the box is at least twice the cutoff.
+  int nc[3];
+  double cell_len[3];
+  for (int d = 0; d < 3; ++d) {
+    if (box.len[d] < 2.0 * rc)
+      throw PhysicsError("box edge " + std::to_string(box.len[d]) +
+                         " is shorter than twice the neighbour cutoff " + std::to_string(rc) +
+                         " (largest diameter + skin): use more particles or a smaller skin");
+    nc[d] = std::max(1, static_cast<int>(std::floor(box.len[d] / rc)));
+    cell_len[d] = box.len[d] / nc[d];
+  }
+  const int ncells = nc[0] * nc[1] * nc[2];
+  if (static_cast<int>(cell_count_.extent(0)) != ncells) {
+    cell_count_ = int_view("neighbor::cell_count", ncells);
+    cell_start_ = int_view("neighbor::cell_start", ncells + 1);
+  }
+  if (static_cast<int>(cell_of_.extent(0)) != n) {
+    cell_of_ = int_view("neighbor::cell_of", n);
+    cell_particles_ = int_view("neighbor::cell_particles", n);
+    offsets_ = int_view("neighbor::offsets", n + 1);
+    x_ref_ = typename Particles<ExecSpace>::vec_view("neighbor::x_ref", n);
+  }
+  auto cell_of = cell_of_, cell_start = cell_start_, cell_count = cell_count_;
+  auto cell_particles = cell_particles_;
+  const PeriodicBox b = box;
+  const int ncx = nc[0], ncy = nc[1], ncz = nc[2];
+  const double clx = cell_len[0], cly = cell_len[1], clz = cell_len[2];
+
+  Kokkos::deep_copy(cell_count, 0);
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::bin", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        int cx = static_cast<int>((x(i, 0) - b.lo[0]) / clx);
+        int cy = static_cast<int>((x(i, 1) - b.lo[1]) / cly);
+        int cz = static_cast<int>((x(i, 2) - b.lo[2]) / clz);
+        cx = cx < 0 ? 0 : (cx >= ncx ? ncx - 1 : cx);  // guards round-off at the faces
+        cy = cy < 0 ? 0 : (cy >= ncy ? ncy - 1 : cy);
+        cz = cz < 0 ? 0 : (cz >= ncz ? ncz - 1 : cz);
+        const int c = (cz * ncy + cy) * ncx + cx;
+        cell_of(i) = c;
+        Kokkos::atomic_increment(&cell_count(c));
+      });
+  Kokkos::parallel_scan(
+      "neighbor::NeighborList::cell_scan", Kokkos::RangePolicy<ExecSpace>(0, ncells + 1),
+      KOKKOS_LAMBDA(const int c, int& acc, const bool final) {
+        if (final) cell_start(c) = acc;
+        if (c < ncells) acc += cell_count(c);
+      });
+  Kokkos::deep_copy(cell_count, 0);
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::fill_cells", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        const int c = cell_of(i);
+        const int slot = Kokkos::atomic_fetch_add(&cell_count(c), 1);
+        cell_particles(cell_start(c) + slot) = i;
+      });
+  // The atomic fill order depends on thread timing; sorting each cell restores a fixed order.
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::sort_cells", Kokkos::RangePolicy<ExecSpace>(0, ncells),
+      KOKKOS_LAMBDA(const int c) {
+        const int s = cell_start(c), e = cell_start(c + 1);
+        for (int a = s + 1; a < e; ++a) {
+          const int v = cell_particles(a);
+          int k = a - 1;
+          while (k >= s && cell_particles(k) > v) {
+            cell_particles(k + 1) = cell_particles(k);
+            --k;
+          }
+          cell_particles(k + 1) = v;
+        }
+      });
+
+  const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles, b,
+                                     skin_, ncx, ncy, ncz};
+
+  // count -> scan -> fill: exact capacity, no overflow to detect.
+  auto offsets = offsets_;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        int count = 0;
+        visit(i, [&](int) { ++count; });
+        offsets(i) = count;
+      });
+  int total = 0;
+  Kokkos::parallel_scan(
+      "neighbor::NeighborList::scan", Kokkos::RangePolicy<ExecSpace>(0, n + 1),
+      KOKKOS_LAMBDA(const int i, int& acc, const bool final) {
+        const int c = i < n ? offsets(i) : 0;
+        if (final) offsets(i) = acc;
+        acc += c;
+      },
+      total);
+  num_entries_ = total;
+  if (static_cast<int>(neighbors_.extent(0)) < total)
+    neighbors_ = int_view("neighbor::neighbors", total + total / 8 + 16);
+  auto neighbors = neighbors_;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        int k = offsets(i);
+        visit(i, [&](int j) { neighbors(k++) = j; });
+      });
+
+  Kokkos::deep_copy(x_ref_, x);
+  for (int d = 0; d < 3; ++d) built_len_[d] = box.len[d];
+  ++builds_;
+}
+
+}  // namespace granular

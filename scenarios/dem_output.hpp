@@ -1,0 +1,61 @@
+// Writing DEM states: a particle snapshot group in an HDF5 file (position, velocity,
+// radius, mass, id, box) that ParaView opens through an XDMF sidecar, and the same group
+// read back as a checkpoint.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/box.hpp"
+#include "core/output.hpp"
+#include "core/particles.hpp"
+
+namespace granular {
+
+template <class ExecSpace>
+void write_state(H5Writer& out, const std::string& group, const Particles<ExecSpace>& p,
+                 const PeriodicBox& box, double density) {
+  const int n = p.n;
+  auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
+  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
+  auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
+  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
+  std::vector<double> pos(3 * n), vel(3 * n), rad(n);
+  std::vector<int> ids(n);
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) pos[3 * i + d] = x(i, d), vel[3 * i + d] = v(i, d);
+    rad[i] = r(i);
+    ids[i] = id(i);
+  }
+  const hsize_t nn = static_cast<hsize_t>(n);
+  out.write(group + "/position", pos, {nn, 3});
+  out.write(group + "/velocity", vel, {nn, 3});
+  out.write(group + "/radius", rad);
+  out.write(group + "/id", ids);
+  out.write(group + "/box_lo", std::vector<double>(box.lo, box.lo + 3));
+  out.write(group + "/box_len", std::vector<double>(box.len, box.len + 3));
+  out.attribute(group, "density", density);
+}
+
+// Reads a state written by write_state back into host particles and a box.
+inline HostParticles read_state(const H5Reader& in, const std::string& group, PeriodicBox& box,
+                                double& density) {
+  const auto pos = in.reals(group + "/position");
+  const auto vel = in.reals(group + "/velocity");
+  const auto rad = in.reals(group + "/radius");
+  const auto lo = in.reals(group + "/box_lo"), len = in.reals(group + "/box_len");
+  density = in.attribute(group, "density");
+  HostParticles h;
+  const int n = static_cast<int>(rad.size());
+  h.resize(n);
+  for (int i = 0; i < n; ++i) {
+    h.x[i] = pos[3 * i], h.y[i] = pos[3 * i + 1], h.z[i] = pos[3 * i + 2];
+    h.vx[i] = vel[3 * i], h.vy[i] = vel[3 * i + 1], h.vz[i] = vel[3 * i + 2];
+    h.radius[i] = rad[i];
+    h.density[i] = density;
+  }
+  for (int d = 0; d < 3; ++d) box.lo[d] = lo[d], box.len[d] = len[d];
+  return h;
+}
+
+}  // namespace granular
