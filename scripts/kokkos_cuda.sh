@@ -8,8 +8,10 @@
 #   build_kokkos_cuda   builds and installs it (no-op when already installed)
 # Run standalone for testing:  bash scripts/kokkos_cuda.sh
 #
-# Downstream CMake projects must use the installed wrapper as their C++ compiler:
+# Downstream CMake projects (CUDA on PATH, or nvcc_wrapper cannot find nvcc):
 #   cmake -DCMAKE_CXX_COMPILER=$kokkos_cuda/bin/nvcc_wrapper -DKokkos_ROOT=$kokkos_cuda ...
+# With the default g++ instead, Kokkos' installed config redirects only the targets that
+# link Kokkos::kokkos to nvcc_wrapper (via bin/kokkos_launch_compiler); both ways work.
 #
 # Kokkos 3.4.1 predates CUDA 13, so a copy of the source is patched (the cached source used
 # by the host build stays untouched). There is no Hopper (sm_90) arch option in 3.4.1;
@@ -32,7 +34,10 @@ declare -F fetch_kokkos_source >/dev/null || fetch_kokkos_source() {
 kokkos_cuda=$cache/kokkos-$kokkos_version-cuda-sm80
 kokkos_cuda_src=$cache/src/kokkos-$kokkos_version-cuda13
 
-case ":$PATH:" in *:/usr/local/cuda/bin:*) ;; *) PATH=/usr/local/cuda/bin:$PATH; export PATH ;; esac
+# nvcc_wrapper calls plain "nvcc"; the CUDA toolkit is not on PATH by default.
+if [ -d /usr/local/cuda/bin ]; then
+  case ":$PATH:" in *:/usr/local/cuda/bin:*) ;; *) PATH=/usr/local/cuda/bin:$PATH; export PATH ;; esac
+fi
 
 # Copy the cached source and adjust the copy for CUDA 13. Each edit is checked, so a
 # source that does not look as expected fails loudly instead of building something odd.
