@@ -1,0 +1,100 @@
+// Physical-safety guards: a time step beyond t_c/10 of the stiffest, lightest pair is
+// refused with the limit in the message; a run driven into huge overlaps is stopped.
+// And output files: an unfinished HDF5 file never appears under its final name.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/output.hpp"
+#include "kernels/contact_linear.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/packing.hpp"
+
+using namespace granular;
+using Exec = Kokkos::DefaultExecutionSpace;
+
+namespace {
+HostParticles small_gas(PeriodicBox& box, double speed) {
+  GasSpec g;
+  g.count = 300, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.3;
+  g.speed = speed;
+  return random_gas(g, box);
+}
+}  // namespace
+
+TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 0.0);
+  LinearNormal model{1e5, 1000};
+  // Lightest pair: two smallest spheres in the gas (d close to 1).
+  double m0 = 1e300, m1 = 1e300;
+  for (int i = 0; i < h.size(); ++i) {
+    const double m = 2000 * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+    if (m < m0) m1 = m0, m0 = m;
+    else if (m < m1) m1 = m;
+  }
+  const double limit = 0.1 * model.contact_duration(m0 * m1 / (m0 + m1));
+  DemParams prm;
+  prm.skin = 0.2;
+  prm.dt = 0.99 * limit;
+  EXPECT_NO_THROW((DemSystem<Exec, LinearNormal>(Particles<Exec>::from_host(h), box, model, prm)));
+  prm.dt = 1.01 * limit;
+  try {
+    DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, model, prm);
+    FAIL() << "time step above t_c/10 accepted";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("set dt <="), std::string::npos) << e.what();
+  }
+}
+
+TEST(SafetyGuards, ViolentCollisionsStopTheRunWithRunawayMessage) {
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 2.0);  // 2 mm/us: overlaps far beyond binary contacts
+  LinearNormal model{1e5, 0};
+  DemParams prm;
+  prm.skin = 0.2, prm.dt = 0.004;
+  DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, model, prm);
+  bool stopped = false;
+  for (int k = 0; k < 200 && !stopped; ++k) {
+    sys.step(10);
+    try {
+      sys.check_health(sys.measure());
+    } catch (const PhysicsError& e) {
+      stopped = true;
+      EXPECT_NE(std::string(e.what()).find("runaway"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(stopped);
+}
+
+TEST(SafetyGuards, GentleGasPassesTheHealthCheck) {
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 0.001);
+  DemParams prm;
+  prm.skin = 0.2, prm.dt = 0.004;
+  DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, LinearNormal{1e5, 1000}, prm);
+  sys.step(500);
+  EXPECT_NO_THROW(sys.check_health(sys.measure()));
+}
+
+TEST(AtomicOutput, UnfinishedFileNeverAppearsUnderItsFinalName) {
+  const auto dir = std::filesystem::temp_directory_path() / "granular_atomic_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "results.h5").string();
+  {
+    H5Writer w(path);
+    w.write("/a/b", std::vector<double>{1, 2, 3});
+    EXPECT_FALSE(std::filesystem::exists(path));  // still under the partial name
+  }  // destroyed without commit, as when a run is interrupted by an exception
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(partial_name(path)));
+  {
+    H5Writer w(path);
+    w.write("/a/b", std::vector<double>{1, 2, 3});
+    w.commit();
+  }
+  ASSERT_TRUE(std::filesystem::exists(path));
+  EXPECT_EQ(H5Reader(path).reals("/a/b"), (std::vector<double>{1, 2, 3}));
+  std::filesystem::remove_all(dir);
+}

@@ -1,0 +1,52 @@
+// Scene files: wrong, missing and unknown keys are errors that name the key and the file.
+#include <gtest/gtest.h>
+
+#include "core/scene_file.hpp"
+
+using granular::InputError;
+using granular::SceneFile;
+
+namespace {
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(SceneFile, UnknownKeyIsRejectedNamingKeyAndFile) {
+  const auto s = SceneFile::parse("scene = \"x\"\n[contact]\nkn = 1.0\nkm = 2.0\n", "demo.toml");
+  EXPECT_EQ(s.text("scene"), "x");
+  EXPECT_DOUBLE_EQ(s.real("contact.kn"), 1.0);
+  const std::string msg = error_of([&] { s.reject_unknown_keys(); });
+  EXPECT_NE(msg.find("contact.km"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("demo.toml"), std::string::npos) << msg;
+}
+
+TEST(SceneFile, MissingAndMistypedKeysNameTheKey) {
+  const auto s = SceneFile::parse("[run]\ndt = \"fast\"\nsteps = 1.5\n", "bad.toml");
+  std::string msg = error_of([&] { s.real("run.skin"); });
+  EXPECT_NE(msg.find("'run.skin' is missing"), std::string::npos) << msg;
+  msg = error_of([&] { s.real("run.dt"); });
+  EXPECT_NE(msg.find("'run.dt' must be a number"), std::string::npos) << msg;
+  msg = error_of([&] { s.integer("run.steps"); });
+  EXPECT_NE(msg.find("'run.steps' must be an integer"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("bad.toml"), std::string::npos) << msg;
+}
+
+TEST(SceneFile, DefaultsAreRecordedAndKnownKeysPass) {
+  const auto s = SceneFile::parse("a = [1, 2.5]\n[t]\nb = true\n", "ok.toml");
+  EXPECT_EQ(s.reals("a"), (std::vector<double>{1.0, 2.5}));
+  EXPECT_TRUE(s.flag("t.b"));
+  EXPECT_EQ(s.integer("t.c", 7), 7);
+  EXPECT_NO_THROW(s.reject_unknown_keys());
+  EXPECT_EQ(s.used().at("t.c"), "7");
+}
+
+TEST(SceneFile, SyntaxErrorReportsFileAndLine) {
+  const std::string msg = error_of([] { SceneFile::parse("a = \n", "broken.toml"); });
+  EXPECT_NE(msg.find("broken.toml"), std::string::npos) << msg;
+}
