@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "granular_config.hpp"
 
 namespace granular {
 namespace fs = std::filesystem;

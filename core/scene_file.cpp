@@ -3,9 +3,18 @@
 
 #include <sstream>
 
+#define TOML_EXCEPTIONS 1
+#include <toml++/toml.h>
+
 namespace granular {
 
+struct SceneFile::Document {
+  toml::table root;
+};
+
 namespace {
+const toml::node* as_node(const void* p) { return static_cast<const toml::node*>(p); }
+
 std::string format_real(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -18,7 +27,8 @@ SceneFile SceneFile::load(const std::string& path) {
   SceneFile s;
   s.path_ = path;
   try {
-    s.root_ = toml::parse_file(path);
+    s.doc_ = std::make_shared<Document>();
+    s.doc_->root = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
     std::ostringstream msg;
     msg << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
@@ -32,15 +42,16 @@ SceneFile SceneFile::parse(const std::string& text, const std::string& source_na
   SceneFile s;
   s.path_ = source_name;
   try {
-    s.root_ = toml::parse(text, source_name);
+    s.doc_ = std::make_shared<Document>();
+    s.doc_->root = toml::parse(text, source_name);
   } catch (const toml::parse_error& e) {
     throw InputError(source_name + ": " + std::string(e.description()));
   }
   return s;
 }
 
-const toml::node* SceneFile::find(const std::string& key) const {
-  return root_.at_path(key).node();
+const void* SceneFile::find(const std::string& key) const {
+  return doc_->root.at_path(key).node();
 }
 
 void SceneFile::fail(const std::string& key, const std::string& what) const {
@@ -58,7 +69,7 @@ void SceneFile::note(const std::string& key, const std::string& value) const {
 bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
 
 double SceneFile::real(const std::string& key) const {
-  const toml::node* n = find(key);
+  const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a number is required)");
   if (auto v = n->value<double>()) {  // integers convert too
     note(key, format_real(*v));
@@ -68,7 +79,7 @@ double SceneFile::real(const std::string& key) const {
 }
 
 long SceneFile::integer(const std::string& key) const {
-  const toml::node* n = find(key);
+  const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an integer is required)");
   if (auto v = n->value_exact<int64_t>()) {
     note(key, std::to_string(*v));
@@ -78,7 +89,7 @@ long SceneFile::integer(const std::string& key) const {
 }
 
 std::string SceneFile::text(const std::string& key) const {
-  const toml::node* n = find(key);
+  const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a string is required)");
   if (auto v = n->value_exact<std::string>()) {
     note(key, "\"" + *v + "\"");
@@ -88,7 +99,7 @@ std::string SceneFile::text(const std::string& key) const {
 }
 
 bool SceneFile::flag(const std::string& key) const {
-  const toml::node* n = find(key);
+  const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (true or false is required)");
   if (auto v = n->value_exact<bool>()) {
     note(key, *v ? "true" : "false");
@@ -98,7 +109,7 @@ bool SceneFile::flag(const std::string& key) const {
 }
 
 std::vector<double> SceneFile::reals(const std::string& key) const {
-  const toml::node* n = find(key);
+  const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an array of numbers is required)");
   const toml::array* a = n->as_array();
   if (!a) fail(key, "must be an array of numbers");
@@ -145,7 +156,7 @@ std::vector<double> SceneFile::reals(const std::string& key, const std::vector<d
 
 void SceneFile::reject_unknown_keys() const {
   // Walk every leaf of the file; a leaf (or a whole table) that no reader touched is unknown.
-  std::vector<std::pair<std::string, const toml::table*>> stack{{"", &root_}};
+  std::vector<std::pair<std::string, const toml::table*>> stack{{"", &doc_->root}};
   while (!stack.empty()) {
     auto [prefix, table] = stack.back();
     stack.pop_back();

@@ -7,8 +7,7 @@
 #include <string>
 #include <vector>
 
-#define TOML_EXCEPTIONS 1
-#include <toml++/toml.h>
+#include <memory>
 
 #include "core/error.hpp"
 
@@ -46,12 +45,14 @@ class SceneFile {
   void require(bool ok, const std::string& key, const std::string& what) const;
 
  private:
-  const toml::node* find(const std::string& key) const;
+  struct Document;  // the parsed TOML tree; kept out of this header so device compilers
+                    // never see the TOML library
+  const void* find(const std::string& key) const;
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
   void note(const std::string& key, const std::string& value) const;
 
   std::string path_;
-  toml::table root_;
+  std::shared_ptr<Document> doc_;
   mutable std::map<std::string, std::string> used_;
 };
 

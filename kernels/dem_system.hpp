@@ -41,7 +41,7 @@ class DemSystem {
       particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
       a_min_ = std::min(a_min_, radius(i));
     }
-    wrap_positions();
+    wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
     nl_.build(p_, box_);
     compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
   }
@@ -111,21 +111,6 @@ class DemSystem {
   double particle_volume() const { return particle_volume_; }
 
  private:
-  // Inputs (data files, checkpoints) may hold positions outside the primary box.
-  void wrap_positions() {
-    auto x = p_.x;
-    const PeriodicBox b = box_;
-    Kokkos::parallel_for(
-        "dem::DemSystem::wrap", Kokkos::RangePolicy<ExecSpace>(0, p_.n), KOKKOS_LAMBDA(const int i) {
-          for (int d = 0; d < 3; ++d) {
-            double xd = x(i, d);
-            const double l = b.len[d];
-            xd -= l * Kokkos::Experimental::floor((xd - b.lo[d]) / l);
-            x(i, d) = xd < b.lo[d] + l ? xd : b.lo[d];  // round-off can land exactly on the face
-          }
-        });
-  }
-
   // The stiffest, lightest pair sets the shortest collision; dt must resolve it.
   void check_time_step() const {
     if (p_.n < 2) return;

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/scene_file.hpp"
+#include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace {

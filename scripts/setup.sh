@@ -7,6 +7,8 @@
 #   GRANULAR_CACHE   where Kokkos is cached   (default ${XDG_CACHE_HOME:-$HOME/.cache}/granular)
 #   GRANULAR_BUILD   project build directory  (default <repo>/build)
 #   GRANULAR_JOBS    parallel build jobs      (default: number of cores)
+#   GRANULAR_CUDA_CHECK=1  also build the engine with the CUDA backend (compile and link
+#                    only) in $GRANULAR_CUDA_BUILD (default <repo>/build-cuda) when nvcc exists
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -102,4 +104,28 @@ if [ "${GRANULAR_SKIP_BUILD:-0}" != 1 ]; then
   fi
   say "building the project"
   cmake --build "$build" -j "$jobs"
+fi
+
+# ---- 4. CUDA compile check (optional) -------------------------------------------------
+# Kokkos' CUDA backend built from the same source (scripts/kokkos_cuda.sh adjusts a copy
+# for CUDA 13); the whole engine, tests and benchmarks must compile and link against it.
+if [ "${GRANULAR_CUDA_CHECK:-0}" = 1 ]; then
+  # shellcheck source=scripts/kokkos_cuda.sh
+  . "$repo/scripts/kokkos_cuda.sh"
+  if ! command -v nvcc >/dev/null 2>&1; then
+    say "CUDA compile check SKIPPED: nvcc not found (looked on PATH and in /usr/local/cuda/bin)"
+  else
+    build_kokkos_cuda
+    cuda_build=${GRANULAR_CUDA_BUILD:-$repo/build-cuda}
+    if [ ! -f "$cuda_build/CMakeCache.txt" ]; then
+      say "configuring the CUDA build in $cuda_build"
+      # The host compiler stays g++: Kokkos' CMake config sends only the targets that link
+      # Kokkos through nvcc_wrapper, so host-only code (TOML, HDF5 wrappers) never meets nvcc.
+      cmake -S "$repo" -B "$cuda_build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_cuda" \
+        >/dev/null
+    fi
+    say "CUDA compile check: building engine, tests and benchmarks with the CUDA backend"
+    cmake --build "$cuda_build" -j "$jobs"
+    say "CUDA compile check passed (compiled and linked; running needs a GPU)"
+  fi
 fi

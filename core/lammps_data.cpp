@@ -1,0 +1,97 @@
+// LAMMPS data file reader (see lammps_data.hpp).
+#include "core/lammps_data.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace granular {
+
+namespace {
+std::string strip_comment(const std::string& line) {
+  const auto p = line.find('#');
+  std::string s = p == std::string::npos ? line : line.substr(0, p);
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+}  // namespace
+
+LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open LAMMPS data file " + path);
+  LammpsData out;
+  long natoms = -1;
+  std::string line;
+  std::getline(in, line);  // the first line is a title
+  std::map<long, std::vector<double>> atoms, vels;
+  std::string section;
+  long lineno = 1;
+  auto fail = [&](const std::string& what) {
+    throw InputError(path + ":" + std::to_string(lineno) + ": " + what);
+  };
+  while (std::getline(in, line)) {
+    ++lineno;
+    const std::string s = strip_comment(line);
+    if (s.empty()) continue;
+    std::istringstream ss(s);
+    if (s == "Atoms" || s == "Velocities" || s == "Masses") {
+      section = s;
+      continue;
+    }
+    if (section.empty()) {  // header
+      double a, b;
+      std::string w1, w2;
+      if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
+        ss >> natoms;
+      } else if (s.find("atom types") != std::string::npos) {
+        ss >> out.atom_types;
+      } else if ((ss >> a >> b >> w1 >> w2) && (w1 == "xlo" || w1 == "ylo" || w1 == "zlo")) {
+        const int d = w1[0] - 'x';
+        out.lo[d] = a * length_scale;
+        out.len[d] = (b - a) * length_scale;
+      }
+      continue;
+    }
+    std::vector<double> v;
+    double x;
+    long id;
+    if (!(ss >> id)) fail("expected an atom id");
+    while (ss >> x) v.push_back(x);
+    if (section == "Atoms") {
+      if (v.size() < 6) fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
+      atoms[id] = v;
+    } else if (section == "Velocities") {
+      if (v.size() < 3) fail("Velocities line needs: id vx vy vz [wx wy wz]");
+      vels[id] = v;
+    }
+  }
+  if (natoms < 0) throw InputError(path + ": header lacks the 'N atoms' line");
+  if (static_cast<long>(atoms.size()) != natoms)
+    throw InputError(path + ": header announces " + std::to_string(natoms) + " atoms, Atoms has " +
+                     std::to_string(atoms.size()));
+  HostParticles& h = out.particles;
+  h.resize(static_cast<int>(natoms));
+  int i = 0;
+  const double vscale = length_scale / time_scale;
+  for (const auto& [id, a] : atoms) {  // std::map: ascending id
+    h.species[i] = static_cast<int>(a[0]) - 1;
+    h.radius[i] = 0.5 * a[1] * length_scale;
+    h.density[i] = a[2] * (1.0 / (length_scale * length_scale * length_scale)) * 1e9;
+    h.x[i] = a[3] * length_scale, h.y[i] = a[4] * length_scale, h.z[i] = a[5] * length_scale;
+    auto it = vels.find(id);
+    if (it != vels.end()) {
+      h.vx[i] = it->second[0] * vscale, h.vy[i] = it->second[1] * vscale, h.vz[i] = it->second[2] * vscale;
+    }
+    ++i;
+  }
+  return out;
+}
+
+}  // namespace granular
