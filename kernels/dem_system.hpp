@@ -28,6 +28,13 @@ struct DemParams {
   double dt_guard = 0.1;     // dt must not exceed this fraction of the shortest collision
 };
 
+// Wall time per phase of the step, filled only when profiling is switched on (it fences
+// after every phase, which a production run should not pay for).
+struct StepProfile {
+  double integrate = 0, strain = 0, neighbor = 0, force = 0;
+  long rebuilds = 0;
+};
+
 template <class ExecSpace, class Model>
 class DemSystem {
  public:
@@ -50,6 +57,7 @@ class DemSystem {
   void step(long n) {
     const double dt = params_.dt;
     const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
+    if (profile_) return step_profiled(n);
     for (long s = 0; s < n; ++s) {
       const double max_sq = kick_drift(p_, box_, nl_.reference(), dt);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
@@ -60,6 +68,9 @@ class DemSystem {
       ++steps_;
     }
   }
+
+  // Same step, timed per phase (for benchmarks). Pass nullptr to switch off.
+  void set_profile(StepProfile* profile) { profile_ = profile; }
 
   void set_strain_rate(double ex, double ey, double ez) {
     rate_[0] = ex, rate_[1] = ey, rate_[2] = ez;
@@ -111,6 +122,36 @@ class DemSystem {
   double particle_volume() const { return particle_volume_; }
 
  private:
+  void step_profiled(long n) {
+    const double dt = params_.dt;
+    const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
+    Kokkos::Timer timer;
+    auto lap = [&](double& acc) {
+      Kokkos::fence();
+      acc += timer.seconds();
+      timer.reset();
+    };
+    Kokkos::fence();
+    timer.reset();
+    for (long s = 0; s < n; ++s) {
+      const double max_sq = kick_drift(p_, box_, nl_.reference(), dt);
+      lap(profile_->integrate);
+      if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
+      lap(profile_->strain);
+      if (nl_.needs_rebuild(max_sq, box_)) {
+        nl_.build(p_, box_);
+        ++profile_->rebuilds;
+      }
+      lap(profile_->neighbor);
+      compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
+      lap(profile_->force);
+      kick(p_, dt);
+      lap(profile_->integrate);
+      time_ += dt;
+      ++steps_;
+    }
+  }
+
   // The stiffest, lightest pair sets the shortest collision; dt must resolve it.
   void check_time_step() const {
     if (p_.n < 2) return;
@@ -141,6 +182,7 @@ class DemSystem {
   long steps_ = 0;
   double particle_volume_ = 0.0;
   double a_min_ = 1e300;
+  StepProfile* profile_ = nullptr;
 };
 
 }  // namespace granular

@@ -1,0 +1,209 @@
+// DEM step throughput (particle-steps per second) on dense packings (phi ~ 0.64), with a
+// per-phase profile, the bytes a step moves and the fraction of the memory bandwidth
+// measured in the same run. Thread count comes from --kokkos-threads; run once per count.
+//
+//   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
+//                        [--data packing.data] [--out perf/results/dem_throughput_2t.json]
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/lammps_data.hpp"
+#include "core/output.hpp"
+#include "kernels/contact_linear.hpp"
+#include "kernels/dem_system.hpp"
+#include "machine_info.hpp"
+#include "scenarios/dem_output.hpp"
+#include "scenarios/packing.hpp"
+
+using namespace granular;
+using Exec = Kokkos::DefaultExecutionSpace;
+using System = DemSystem<Exec, LinearNormal>;
+
+namespace {
+
+// The benchmark's physics: the spec's linear set (k_n 1e5 N/mm, gamma_n 1000 ug/us
+// absolute), frictionless, no background damping, dt = 0.0045 us (t_c/50 of the smallest
+// pair), skin 0.2 mm. Units mm, us, ug.
+const LinearNormal kModel{1e5, 1000};
+DemParams bench_params() {
+  DemParams p;
+  p.dt = 0.0045;
+  p.skin = 0.2;
+  p.max_overlap = 1.0;
+  return p;
+}
+
+// A dense packing: random gas at phi 0.3, fast damped compression to 0.64, short
+// relaxation; cached as HDF5 so later runs (other thread counts) time the same state.
+HostParticles dense_packing(int n, PeriodicBox& box, const std::string& cache_dir) {
+  const std::string path = cache_dir + "/packing_" + std::to_string(n) + ".h5";
+  if (std::filesystem::exists(path)) {
+    H5Reader in(path);
+    double density;
+    return read_state(in, "/state", box, density);
+  }
+  std::cerr << "preparing a dense packing of " << n << " spheres (cached in " << path << ")\n";
+  GasSpec g;
+  g.count = n, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.3, g.seed = 12345;
+  const HostParticles gas = random_gas(g, box);
+  DemParams prm = bench_params();
+  prm.dt = 0.004;
+  prm.damping.translational = 100;
+  System sys(Particles<Exec>::from_host(gas), box, kModel, prm);
+  const double rate = -2e-2 / 3;  // volumetric 2e-2 per us
+  const long steps = static_cast<long>(std::log(0.64 / 0.3) / (-3 * std::log1p(rate * prm.dt)));
+  sys.set_strain_rate(rate, rate, rate);
+  sys.step(steps);
+  sys.set_strain_rate(0, 0, 0);
+  sys.step(2000);
+  std::filesystem::create_directories(cache_dir);
+  H5Writer out(path);
+  write_state(out, "/state", sys.particles(), sys.box(), 2000.0);
+  out.commit();
+  H5Reader in(path);
+  double density;
+  return read_state(in, "/state", box, density);
+}
+
+std::vector<int> parse_sizes(const std::string& s) {
+  std::vector<int> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(std::stoi(item));
+  return out;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Kokkos::initialize(argc, argv);
+  {
+    std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache";
+    int reps = 3;
+    long steps = 2000, warmup = 500;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
+        return argv[++i];
+      };
+      if (a == "--sizes") sizes = next();
+      else if (a == "--reps") reps = std::stoi(next());
+      else if (a == "--steps") steps = std::stol(next());
+      else if (a == "--warmup") warmup = std::stol(next());
+      else if (a == "--data") data = next();
+      else if (a == "--out") out = next();
+      else if (a == "--cache") cache_dir = next();
+      else if (a.rfind("--kokkos", 0) != 0) {
+        std::cerr << "unknown option " << a << "\n";
+        return 2;
+      }
+    }
+    const int threads = Exec::concurrency();
+    if (out.empty()) out = "perf/results/dem_throughput_" + std::to_string(threads) + "t.json";
+
+    const double bandwidth = perf::triad_bandwidth();
+    Json result = Json::object();
+    result["benchmark"] = "dem_throughput";
+    result["machine"] = perf::machine_info();
+    result["triad_bandwidth_GBs"] = bandwidth / 1e9;
+    result["physics"] = "linear normal spring-dashpot (k_n 1e5, gamma_n 1000), frictionless, dt 0.0045, skin 0.2";
+    result["steps_timed"] = steps;
+    result["warmup_steps"] = warmup;
+    Json rows = Json::array();
+
+    const std::vector<int> ns = data.empty() ? parse_sizes(sizes) : std::vector<int>{0};
+    for (int n_req : ns) {
+      PeriodicBox box;
+      HostParticles host;
+      std::string source;
+      if (!data.empty()) {
+        LammpsData d = read_lammps_data(data);
+        host = d.particles;
+        for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
+        source = data;
+      } else {
+        host = dense_packing(n_req, box, cache_dir);
+        source = "generated (seed 12345)";
+      }
+      const int n = host.size();
+      std::vector<double> rates;
+      StepProfile prof;
+      double z_start = 0, z_end = 0, phi = 0;
+      long builds = 0;
+      double entries = 0;
+      for (int r = 0; r < reps; ++r) {
+        System sys(Particles<Exec>::from_host(host), box, kModel, bench_params());
+        sys.step(warmup);
+        const Measurements m0 = sys.measure();
+        const long builds0 = sys.neighbor_list().builds();
+        Kokkos::fence();
+        Kokkos::Timer t;
+        sys.step(steps);
+        Kokkos::fence();
+        const double sec = t.seconds();
+        rates.push_back(static_cast<double>(n) * steps / sec);
+        const Measurements m1 = sys.measure();
+        z_start = m0.z, z_end = m1.z, phi = m1.phi;
+        builds = sys.neighbor_list().builds() - builds0;
+        entries = sys.neighbor_list().num_entries();
+        if (r == 0) {  // one extra profiled window, not part of the timed figures
+          sys.set_profile(&prof);
+          sys.step(std::min(steps, 500L));
+          sys.set_profile(nullptr);
+        }
+        std::cerr << "N " << n << " rep " << r << ": " << rates.back() / 1e6 << " M particle-steps/s\n";
+      }
+      // Bytes a particle-step touches, counted from the data the kernels read and write
+      // (each access once; neighbour data that hits cache still counts).
+      const double nb = entries / n, contacts = z_end;
+      const double force_bytes = 24 + 24 + 8 + 8 + 24 + nb * (4 + 24 + 8) + contacts * 24;
+      const double integrate_bytes = (48 + 48 + 24 + 8 + 24) + (48 + 24 + 8);
+      const double bytes = force_bytes + integrate_bytes;
+      const double med = median(rates);
+      const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
+      Json row = Json::object();
+      row["N"] = n;
+      row["source"] = source;
+      row["threads"] = threads;
+      row["phi"] = phi;
+      row["z_start"] = z_start;
+      row["z_end"] = z_end;
+      row["neighbors_per_particle_full_list"] = nb;
+      row["neighbor_builds_in_timed_window"] = builds;
+      row["particle_steps_per_s"] = rates;
+      row["median_particle_steps_per_s"] = med;
+      row["bytes_per_particle_step"] = bytes;
+      row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
+      row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
+      Json split = Json::object();
+      split["force"] = prof.force / prof_total;
+      split["integrate"] = prof.integrate / prof_total;
+      split["neighbor"] = prof.neighbor / prof_total;
+      split["strain"] = prof.strain / prof_total;
+      row["profile_fraction"] = split;
+      rows.push(row);
+      std::cout << "N " << n << " threads " << threads << ": median " << med / 1e6
+                << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step, "
+                << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9 << " GB/s\n";
+    }
+    result["rows"] = rows;
+    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
+    write_text_file(out, result.dump());
+    std::cout << "wrote " << out << "\n";
+  }
+  Kokkos::finalize();
+  return 0;
+}

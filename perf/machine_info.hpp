@@ -1,0 +1,55 @@
+// Facts about the machine and build that every benchmark result file records, and a
+// STREAM-like triad that measures the sustainable memory bandwidth in the same run.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include "core/output.hpp"
+
+namespace granular::perf {
+
+inline std::string cpu_model() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+inline Json machine_info() {
+  Json m = Json::object();
+  m["cpu_model"] = cpu_model();
+  m["hardware_threads"] = static_cast<int>(std::thread::hardware_concurrency());
+  m["compiler"] = std::string(__VERSION__);
+  m["kokkos_execution_space"] = std::string(Kokkos::DefaultExecutionSpace::name());
+  m["kokkos_concurrency"] = Kokkos::DefaultExecutionSpace::concurrency();
+  const char* bind = std::getenv("OMP_PROC_BIND");
+  m["OMP_PROC_BIND"] = bind ? bind : "unset";
+  return m;
+}
+
+// Triad a = b + s c over arrays far larger than the last-level cache; returns the best
+// of `reps` in bytes per second (24 bytes per element: two reads, one write; write-allocate
+// traffic is not counted, as in STREAM).
+inline double triad_bandwidth(long n = 1L << 25, int reps = 10) {
+  using Exec = Kokkos::DefaultExecutionSpace;
+  Kokkos::View<double*> a("triad::a", n), b("triad::b", n), c("triad::c", n);
+  Kokkos::deep_copy(b, 1.0);
+  Kokkos::deep_copy(c, 2.0);
+  double best = 0;
+  for (int r = 0; r < reps; ++r) {
+    Kokkos::fence();
+    Kokkos::Timer t;
+    Kokkos::parallel_for(
+        "perf::triad", Kokkos::RangePolicy<Exec>(0, n),
+        KOKKOS_LAMBDA(const long i) { a(i) = b(i) + 3.0 * c(i); });
+    Kokkos::fence();
+    best = std::max(best, 24.0 * n / t.seconds());
+  }
+  return best;
+}
+
+}  // namespace granular::perf
