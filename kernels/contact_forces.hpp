@@ -1,63 +1,112 @@
 // Contact and background-damping forces: one generic loop over the neighbour list,
 // templated on the contact model (the model struct holds the physics of one pair).
+// Each particle sums its own forces in list order (full list: no atomics, reproducible),
+// and advances its own copy of each contact's history; the two copies of a contact stay
+// exact mirror images because every formula is antisymmetric in (i, j) to the last bit.
 #pragma once
 #include <Kokkos_Core.hpp>
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/neighbor_list.hpp"
 
 namespace granular {
 
 struct Damping {
   double translational = 0.0;  // gamma_b: f = -gamma_b (v - v_affine)
-  double rotational = 0.0;     // gamma_br
+  double rotational = 0.0;     // gamma_br: q = -gamma_br omega
 };
 
-// Velocities are stored relative to the affine flow of the deforming box (the box moves
-// particles affinely in the strain kernel), so background damping acts on v directly and
-// the contact dashpot adds the affine relative velocity rate * r_ij of the pair.
-template <class ExecSpace, class Model>
+// Geometry and relative motion of pair (i, j); false when they do not touch.
+// Velocities are stored relative to the affine flow of the deforming box, so the pair's
+// affine relative velocity rate * r_ij is added here.
+template <class Views>
+KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, const double rate[3],
+                                       bool rotations, int i, int j, PairState& s) {
+  const double rx = b.min_image(v.x(i, 0) - v.x(j, 0), 0);
+  const double ry = b.min_image(v.x(i, 1) - v.x(j, 1), 1);
+  const double rz = b.min_image(v.x(i, 2) - v.x(j, 2), 2);
+  s.ai = v.radius(i), s.aj = v.radius(j);
+  const double sum = s.ai + s.aj;
+  const double r2 = rx * rx + ry * ry + rz * rz;
+  if (r2 >= sum * sum) return false;  // reject before the sqrt
+  const double r = Kokkos::Experimental::sqrt(r2);
+  s.n[0] = rx / r, s.n[1] = ry / r, s.n[2] = rz / r;
+  s.delta = sum - r;
+  s.si = v.species(i), s.sj = v.species(j);
+  double dv[3] = {v.v(i, 0) - v.v(j, 0) + rate[0] * rx, v.v(i, 1) - v.v(j, 1) + rate[1] * ry,
+                  v.v(i, 2) - v.v(j, 2) + rate[2] * rz};
+  const double vn = dot3(dv, s.n);
+  s.delta_dot = -vn;
+  if (rotations) {
+    // Contact-point velocities: v_i - a_i w_i x n minus v_j + a_j w_j x n.
+    const double aw[3] = {s.ai * v.w(i, 0) + s.aj * v.w(j, 0), s.ai * v.w(i, 1) + s.aj * v.w(j, 1),
+                          s.ai * v.w(i, 2) + s.aj * v.w(j, 2)};
+    double c[3];
+    cross3(aw, s.n, c);
+    for (int d = 0; d < 3; ++d) {
+      s.vt[d] = dv[d] - vn * s.n[d] - c[d];
+      s.wrel[d] = v.w(i, d) - v.w(j, d);
+    }
+  } else {
+    for (int d = 0; d < 3; ++d) s.vt[d] = dv[d] - vn * s.n[d], s.wrel[d] = 0.0;
+  }
+  return true;
+}
+
+template <class ExecSpace>
+struct ParticleViews {
+  using mem = typename ExecSpace::memory_space;
+  Kokkos::View<double* [3], mem> x, v, w;
+  Kokkos::View<double*, mem> radius;
+  Kokkos::View<int*, mem> species;
+  explicit ParticleViews(const Particles<ExecSpace>& p)
+      : x(p.x), v(p.v), w(p.w), radius(p.radius), species(p.species) {}
+};
+
+template <class ExecSpace, class Model, class HistoryView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                    const PeriodicBox& box, const Model& model, const Damping& damping,
-                    const double strain_rate[3]) {
-  auto x = p.x, v = p.v, f = p.f;
-  auto radius = p.radius;
+                    const HistoryView& history, const PeriodicBox& box, const Model& model,
+                    const Damping& damping, const double strain_rate[3], double dt) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto f = p.f, torque = p.torque;
   auto offsets = nl.offsets(), neighbors = nl.neighbors();
   const PeriodicBox b = box;
   const Model m = model;
-  const double gb = damping.translational;
-  const double ex = strain_rate[0], ey = strain_rate[1], ez = strain_rate[2];
+  const double gb = damping.translational, gr = damping.rotational;
+  const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
+  constexpr int H = Model::history;
+  constexpr bool rot = Model::rotations;
   Kokkos::parallel_for(
-      "dem::compute_forces::linear_normal", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
-        const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2), ai = radius(i);
-        const double vxi = v(i, 0), vyi = v(i, 1), vzi = v(i, 2);
-        double fx = -gb * vxi, fy = -gb * vyi, fz = -gb * vzi;
+      "dem::compute_forces", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
+        double qi[3] = {0, 0, 0};
+        if (rot)
+          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+        const double r3[3] = {rate[0], rate[1], rate[2]};
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          const int j = neighbors(k);
-          const double rx = b.min_image(xi - x(j, 0), 0);
-          const double ry = b.min_image(yi - x(j, 1), 1);
-          const double rz = b.min_image(zi - x(j, 2), 2);
-          const double sum = ai + radius(j);
-          const double r2 = rx * rx + ry * ry + rz * rz;
-          if (r2 >= sum * sum) continue;  // reject before the sqrt
-          const double r = Kokkos::Experimental::sqrt(r2);
-          const double inv = 1.0 / r;
-          const double nx = rx * inv, ny = ry * inv, nz = rz * inv;
-          const double delta = sum - r;
-          const double dvx = vxi - v(j, 0) + ex * rx;
-          const double dvy = vyi - v(j, 1) + ey * ry;
-          const double dvz = vzi - v(j, 2) + ez * rz;
-          const double delta_dot = -(dvx * nx + dvy * ny + dvz * nz);
-          const double fn = m.force(delta, delta_dot);
-          fx += fn * nx;
-          fy += fn * ny;
-          fz += fn * nz;
+          PairState s;
+          double h[H > 0 ? H : 1];
+          if (!pair_state(pv, b, r3, rot, i, neighbors(k), s)) {
+            // Contact ended (or never began): its history is forgotten.
+            if constexpr (H > 0)
+              for (int c = 0; c < H; ++c) history(k, c) = 0.0;
+            continue;
+          }
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) h[c] = history(k, c);
+          PairForce out;
+          m.evaluate(s, dt, h, out);
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) history(k, c) = h[c];
+          for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
+          if (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
         }
-        f(i, 0) = fx;
-        f(i, 1) = fy;
-        f(i, 2) = fz;
+        for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
+        if (rot)
+          for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
       });
 }
 

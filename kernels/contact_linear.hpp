@@ -5,33 +5,61 @@
 #include <Kokkos_Core.hpp>
 #include <cmath>
 
+#include "kernels/contact_state.hpp"
+
 namespace granular {
 
 struct LinearNormal {
-  double kn = 0.0;  // normal stiffness
-  double gn = 0.0;  // normal viscosity
+  static constexpr int history = 0;
+  struct Params {
+    double kn = 0.0;  // normal stiffness
+    double gn = 0.0;  // normal viscosity
+  };
+  PairTable<Params> table;
 
-  KOKKOS_INLINE_FUNCTION double force(double delta, double delta_dot) const {
-    return kn * delta + gn * delta_dot;
-  }
-  KOKKOS_INLINE_FUNCTION double energy(double delta) const { return 0.5 * kn * delta * delta; }
+  static LinearNormal uniform(double kn, double gn) { return {PairTable<Params>::uniform({kn, gn})}; }
 
-  // Closed forms for a pair of reduced mass m (dem.md section 2).
-  double omega(double m) const {
-    const double eta = gn / (2.0 * m);
-    return std::sqrt(kn / m - eta * eta);
+  KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
+    const Params& q = table(s.si, s.sj);
+    return q.kn * s.delta + q.gn * s.delta_dot;
   }
-  double contact_duration(double m) const { return M_PI / omega(m); }
-  double restitution(double m) const {
-    return std::exp(-gn / (2.0 * m) * contact_duration(m));
+  KOKKOS_INLINE_FUNCTION double elastic_force(const PairState& s, const double*) const {
+    return table(s.si, s.sj).kn * s.delta;
   }
-  // Shortest collision for the time-step guard; overdamped pairs fall back to the
-  // undamped half period, which is shorter.
-  double shortest_duration(double m) const {
-    const double eta = gn / (2.0 * m);
-    return kn / m > eta * eta ? contact_duration(m) : M_PI * std::sqrt(m / kn);
+  KOKKOS_INLINE_FUNCTION double energy(const PairState& s, const double*) const {
+    return 0.5 * table(s.si, s.sj).kn * s.delta * s.delta;
   }
-  double stiffness() const { return kn; }
+
+  // Closed forms for a pair of species (0, 0) and reduced mass m (dem.md section 2).
+  double omega(double m, int si = 0, int sj = 0) const {
+    const Params& q = table.p[si][sj];
+    const double eta = q.gn / (2.0 * m);
+    return std::sqrt(q.kn / m - eta * eta);
+  }
+  double contact_duration(double m, int si = 0, int sj = 0) const { return M_PI / omega(m, si, sj); }
+  double restitution(double m, int si = 0, int sj = 0) const {
+    return std::exp(-table.p[si][sj].gn / (2.0 * m) * contact_duration(m, si, sj));
+  }
+  // Shortest collision for the time-step guard over all pairs; overdamped pairs fall
+  // back to the undamped half period, which is shorter.
+  double shortest_duration(double m, double /*delta_ref*/ = 0, double /*length_max*/ = 0) const {
+    double t = 1e300;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        const Params& q = table.p[a][b];
+        if (!(q.kn > 0)) continue;
+        const double eta = q.gn / (2.0 * m);
+        t = std::min(t, q.kn / m > eta * eta ? M_PI / std::sqrt(q.kn / m - eta * eta)
+                                              : M_PI * std::sqrt(m / q.kn));
+      }
+    return t;
+  }
+  double stiffness(double /*delta_ref*/ = 0, double /*length_max*/ = 0) const {
+    double k = 0;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) k = std::max(k, table.p[a][b].kn);
+    return k;
+  }
 };
 
 }  // namespace granular

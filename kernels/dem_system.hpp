@@ -12,6 +12,8 @@
 #include "core/error.hpp"
 #include "core/particles.hpp"
 #include "kernels/contact_forces.hpp"
+#include "kernels/contact_history.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/integrator.hpp"
 #include "kernels/measure.hpp"
 #include "kernels/neighbor_list.hpp"
@@ -26,6 +28,8 @@ struct DemParams {
   int rattler_threshold = 3;
   double max_overlap = 0.3;  // delta / min(a_i, a_j) above which the run is stopped
   double dt_guard = 0.1;     // dt must not exceed this fraction of the shortest collision
+  long rebuild_every = 0;    // > 0: rebuild the neighbour list every this many steps, whatever
+                             // the skin criterion says (tests, benchmarks of flowing systems)
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -42,15 +46,16 @@ class DemSystem {
             const DemParams& params)
       : p_(std::move(particles)), box_(box), model_(model), params_(params), nl_(params.skin) {
     if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
-    check_time_step();
     auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
     for (int i = 0; i < p_.n; ++i) {
       particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
       a_min_ = std::min(a_min_, radius(i));
+      a_max_ = std::max(a_max_, radius(i));
     }
+    check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
-    nl_.build(p_, box_);
-    compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
+    rebuild();
+    forces(0.0);  // initial forces: no spring increment for a step not taken
   }
 
   // Advances n steps of velocity Verlet with the current strain rate.
@@ -59,11 +64,11 @@ class DemSystem {
     const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
     if (profile_) return step_profiled(n);
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift(p_, box_, nl_.reference(), dt);
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
-      if (nl_.needs_rebuild(max_sq, box_)) nl_.build(p_, box_);
-      compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
-      kick(p_, dt);
+      if (rebuild_due(max_sq)) rebuild();
+      forces(dt);
+      kick<kRot>(p_, dt);
       time_ += dt;
       ++steps_;
     }
@@ -76,11 +81,21 @@ class DemSystem {
     rate_[0] = ex, rate_[1] = ey, rate_[2] = ez;
   }
   // Forces depend on velocities (damping): recompute after external edits of the state.
-  void refresh_forces() { compute_forces(p_, nl_, box_, model_, params_.damping, rate_); }
-  void rebuild() { nl_.build(p_, box_); }
+  void refresh_forces() { forces(0.0); }
+  // Neighbour list from scratch, contact history carried over by partner identity.
+  void rebuild() {
+    nl_.build(p_, box_);
+    history_.remap(p_, nl_);
+  }
 
   Measurements measure() const {
-    return granular::measure(p_, nl_, box_, model_, params_.rattler_threshold, particle_volume_);
+    return granular::measure(p_, nl_, history_view(), box_, model_, params_.rattler_threshold,
+                             particle_volume_);
+  }
+  // Per-contact history rows, aligned with the neighbour list (empty for models without).
+  typename ContactHistory<ExecSpace, Model::history>::values_view history_view() const {
+    if constexpr (Model::history > 0) return history_.values();
+    else return dummy_history_;
   }
 
   // Stops the run with a message that says what to change.
@@ -100,7 +115,8 @@ class DemSystem {
       throw PhysicsError(msg.str());
     }
     // Kinetic energy per particle that could drive an overlap beyond the limit on impact.
-    const double e_limit = 0.5 * model_.stiffness() * std::pow(params_.max_overlap * a_min_, 2);
+    const double delta_ref = params_.max_overlap * a_min_;
+    const double e_limit = 0.5 * model_.stiffness(delta_ref, 2 * a_max_) * delta_ref * delta_ref;
     if (p_.n > 0 && m.ekin / p_.n > e_limit) {
       msg << "runaway kinetic energy at t = " << time_ << " (step " << steps_
           << "): " << m.ekin / p_.n << " per particle exceeds " << e_limit
@@ -122,6 +138,16 @@ class DemSystem {
   double particle_volume() const { return particle_volume_; }
 
  private:
+  static constexpr bool kRot = Model::rotations;
+
+  bool rebuild_due(double max_sq) const {
+    if (params_.rebuild_every > 0) return steps_ % params_.rebuild_every == params_.rebuild_every - 1;
+    return nl_.needs_rebuild(max_sq, box_);
+  }
+  void forces(double dt) {
+    compute_forces(p_, nl_, history_view(), box_, model_, params_.damping, rate_, dt);
+  }
+
   void step_profiled(long n) {
     const double dt = params_.dt;
     const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
@@ -134,18 +160,18 @@ class DemSystem {
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift(p_, box_, nl_.reference(), dt);
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt);
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);
-      if (nl_.needs_rebuild(max_sq, box_)) {
-        nl_.build(p_, box_);
+      if (rebuild_due(max_sq)) {
+        rebuild();
         ++profile_->rebuilds;
       }
       lap(profile_->neighbor);
-      compute_forces(p_, nl_, box_, model_, params_.damping, rate_);
+      forces(dt);
       lap(profile_->force);
-      kick(p_, dt);
+      kick<kRot>(p_, dt);
       lap(profile_->integrate);
       time_ += dt;
       ++steps_;
@@ -159,13 +185,13 @@ class DemSystem {
     std::vector<double> m(mass.data(), mass.data() + p_.n);
     std::partial_sort(m.begin(), m.begin() + 2, m.end());
     const double m_red = m[0] * m[1] / (m[0] + m[1]);
-    const double tc = model_.shortest_duration(m_red);
+    const double tc = model_.shortest_duration(m_red, params_.max_overlap * a_min_, 2 * a_max_);
     if (params_.dt > params_.dt_guard * tc) {
       std::ostringstream msg;
       msg.precision(4);
       msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard
           << " = " << params_.dt_guard * tc << " for the stiffest, lightest pair (stiffness "
-          << model_.stiffness() << ", reduced mass " << m_red << ", contact duration " << tc
+          << model_.stiffness(params_.max_overlap * a_min_, 2 * a_max_) << ", reduced mass " << m_red << ", contact duration " << tc
           << "): set dt <= " << params_.dt_guard * tc << " (t_c/50 = " << tc / 50
           << " is the usual choice)";
       throw PhysicsError(msg.str());
@@ -181,7 +207,9 @@ class DemSystem {
   double time_ = 0.0;
   long steps_ = 0;
   double particle_volume_ = 0.0;
-  double a_min_ = 1e300;
+  double a_min_ = 1e300, a_max_ = 0.0;
+  ContactHistory<ExecSpace, Model::history> history_;
+  typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history", 1, 1};
   StepProfile* profile_ = nullptr;
 };
 

@@ -9,11 +9,12 @@
 
 namespace granular {
 
-template <class ExecSpace>
+// Rotations are integrated only when the contact model produces torques.
+template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt) {
-  auto x = p.x, v = p.v, f = p.f;
-  auto mass = p.mass;
+  auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
+  auto mass = p.mass, inertia = p.inertia;
   const PeriodicBox b = box;
   double max_sq = 0.0;
   Kokkos::parallel_reduce(
@@ -29,16 +30,20 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
           const double u = b.min_image(xd - x_ref(i, d), d);
           d2 += u * u;
         }
+        if (Rotations) {
+          const double hr = 0.5 * dt / inertia(i);
+          for (int d = 0; d < 3; ++d) w(i, d) += hr * q(i, d);
+        }
         m = d2 > m ? d2 : m;
       },
       Kokkos::Max<double>(max_sq));
   return max_sq;
 }
 
-template <class ExecSpace>
+template <bool Rotations, class ExecSpace>
 void kick(const Particles<ExecSpace>& p, double dt) {
-  auto v = p.v, f = p.f;
-  auto mass = p.mass;
+  auto v = p.v, f = p.f, w = p.w, q = p.torque;
+  auto mass = p.mass, inertia = p.inertia;
   Kokkos::parallel_for(
       "dem::VelocityVerlet::kick", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
@@ -46,6 +51,10 @@ void kick(const Particles<ExecSpace>& p, double dt) {
         v(i, 0) += h * f(i, 0);
         v(i, 1) += h * f(i, 1);
         v(i, 2) += h * f(i, 2);
+        if (Rotations) {
+          const double hr = 0.5 * dt / inertia(i);
+          for (int d = 0; d < 3; ++d) w(i, d) += hr * q(i, d);
+        }
       });
 }
 

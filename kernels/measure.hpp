@@ -7,6 +7,7 @@
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
+#include "kernels/contact_forces.hpp"
 #include "kernels/deterministic_sum.hpp"
 #include "kernels/neighbor_list.hpp"
 
@@ -16,6 +17,8 @@ struct Measurements {
   double ekin = 0;        // translational + rotational kinetic energy
   double epot = 0;        // elastic energy stored in contacts
   double stress[6] = {};  // xx yy zz xy xz yz; static (contact) part, positive in compression
+  double stress_normal[6] = {};      // the same sum with normal contact forces only
+  double stress_tangential[6] = {};  // ... and with tangential contact forces only
   double pressure = 0;    // tr(stress)/3
   double contacts = 0;    // number of contacts (pairs)
   double z = 0;           // 2 contacts / N
@@ -26,15 +29,19 @@ struct Measurements {
   double volume = 0;
 };
 
-template <class ExecSpace, class Model>
+template <class ExecSpace, class Model, class HistoryView>
 Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                     const PeriodicBox& box, const Model& model, int rattler_threshold,
-                     double particle_volume) {
-  constexpr int NC = 11;
+                     const HistoryView& history, const PeriodicBox& box, const Model& model,
+                     int rattler_threshold, double particle_volume) {
+  // Columns: ekin, epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers,
+  // normal-force stress (6), tangential-force stress (6).
+  constexpr int NC = 23;
+  constexpr int H = Model::history;
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
-  auto x = p.x, v = p.v, w = p.w;
-  auto radius = p.radius, mass = p.mass, inertia = p.inertia;
+  const ParticleViews<ExecSpace> pv(p);
+  auto v = p.v, w = p.w;
+  auto mass = p.mass, inertia = p.inertia;
   auto offsets = nl.offsets(), neighbors = nl.neighbors();
   const PeriodicBox b = box;
   const Model m = model;
@@ -43,35 +50,41 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   Kokkos::parallel_reduce(
       "dem::measure::per_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i, double& mo) {
-        double s[6] = {0, 0, 0, 0, 0, 0};
+        double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0};
         double epot = 0.0;
         int c = 0;
-        const double ai = radius(i);
+        const double zero[3] = {0, 0, 0};
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          const int j = neighbors(k);
-          const double rx = b.min_image(x(i, 0) - x(j, 0), 0);
-          const double ry = b.min_image(x(i, 1) - x(j, 1), 1);
-          const double rz = b.min_image(x(i, 2) - x(j, 2), 2);
-          const double sum = ai + radius(j);
-          const double r2 = rx * rx + ry * ry + rz * rz;
-          if (r2 >= sum * sum) continue;
-          const double r = Kokkos::Experimental::sqrt(r2);
-          const double delta = sum - r;
-          // Elastic part only: the stress of a static packing; each pair is seen twice.
-          const double fn = m.force(delta, 0.0);
-          const double lf = 0.5 * fn / r;  // (r n) (fn n) / 2 = r r fn / (2 r)
-          s[0] += lf * rx * rx, s[1] += lf * ry * ry, s[2] += lf * rz * rz;
-          s[3] += lf * rx * ry, s[4] += lf * rx * rz, s[5] += lf * ry * rz;
-          epot += 0.5 * m.energy(delta);
+          PairState s;
+          if (!pair_state(pv, b, zero, Model::rotations, i, neighbors(k), s)) continue;
+          double h[H > 0 ? H : 1];
+          if constexpr (H > 0)
+            for (int q = 0; q < H; ++q) h[q] = history(k, q);
+          PairForce e;
+          m.elastic(s, h, e);
+          // sigma = (1/V) sum_c l (x) f with branch vector l = r n; each pair is seen twice.
+          const double r = s.ai + s.aj - s.delta;
+          const double l[3] = {0.5 * r * s.n[0], 0.5 * r * s.n[1], 0.5 * r * s.n[2]};
+          const double fnv[3] = {e.fn * s.n[0], e.fn * s.n[1], e.fn * s.n[2]};
+          const int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
+          for (int q = 0; q < 6; ++q) {
+            sn[q] += l[ia[q]] * fnv[ib[q]];
+            st[q] += l[ia[q]] * e.ft[ib[q]];
+          }
+          epot += 0.5 * m.energy(s, h);
           ++c;
-          const double amin = ai < radius(j) ? ai : radius(j);
-          mo = delta / amin > mo ? delta / amin : mo;
+          const double amin = s.ai < s.aj ? s.ai : s.aj;
+          mo = s.delta / amin > mo ? s.delta / amin : mo;
         }
         const double v2 = v(i, 0) * v(i, 0) + v(i, 1) * v(i, 1) + v(i, 2) * v(i, 2);
         const double w2 = w(i, 0) * w(i, 0) + w(i, 1) * w(i, 1) + w(i, 2) * w(i, 2);
         per(i, 0) = 0.5 * mass(i) * v2 + 0.5 * inertia(i) * w2;
         per(i, 1) = epot;
-        for (int q = 0; q < 6; ++q) per(i, 2 + q) = s[q];
+        for (int q = 0; q < 6; ++q) {
+          per(i, 2 + q) = sn[q] + st[q];
+          per(i, 11 + q) = sn[q];
+          per(i, 17 + q) = st[q];
+        }
         per(i, 8) = c;
         per(i, 9) = c >= thr ? 1.0 : 0.0;
         per(i, 10) = c >= thr ? c : 0.0;
@@ -82,7 +95,11 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   out.volume = box.volume();
   out.ekin = sums[0];
   out.epot = sums[1];
-  for (int q = 0; q < 6; ++q) out.stress[q] = sums[2 + q] / out.volume;
+  for (int q = 0; q < 6; ++q) {
+    out.stress[q] = sums[2 + q] / out.volume;
+    out.stress_normal[q] = sums[11 + q] / out.volume;
+    out.stress_tangential[q] = sums[17 + q] / out.volume;
+  }
   out.pressure = (out.stress[0] + out.stress[1] + out.stress[2]) / 3.0;
   out.contacts = sums[8] / 2.0;
   out.z = p.n > 0 ? sums[8] / p.n : 0.0;

@@ -15,7 +15,7 @@
 
 #include "core/lammps_data.hpp"
 #include "core/output.hpp"
-#include "kernels/contact_linear.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "machine_info.hpp"
 #include "scenarios/dem_output.hpp"
@@ -23,14 +23,14 @@
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;
-using System = DemSystem<Exec, LinearNormal>;
+using System = DemSystem<Exec, FrictionlessLinear>;
 
 namespace {
 
 // The benchmark's physics: the spec's linear set (k_n 1e5 N/mm, gamma_n 1000 ug/us
 // absolute), frictionless, no background damping, dt = 0.0045 us (t_c/50 of the smallest
 // pair), skin 0.2 mm. Units mm, us, ug.
-const LinearNormal kModel{1e5, 1000};
+const FrictionlessLinear kModel = frictionless_linear(1e5, 1000);
 DemParams bench_params() {
   DemParams p;
   p.dt = 0.0045;

@@ -10,7 +10,7 @@
 
 #include "core/output.hpp"
 #include "core/progress.hpp"
-#include "kernels/contact_linear.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/dem_output.hpp"
 #include "scenarios/packing.hpp"
@@ -21,7 +21,7 @@ namespace granular {
 namespace {
 
 using Exec = Kokkos::DefaultExecutionSpace;
-using System = DemSystem<Exec, LinearNormal>;
+using System = DemSystem<Exec, FrictionlessLinear>;
 
 // Columns of the time series, in file order.
 const char* const kSeries[] = {"time",  "step", "phi",      "pressure",  "pressure_star",
@@ -32,7 +32,7 @@ const char* const kSeries[] = {"time",  "step", "phi",      "pressure",  "pressu
 struct Series {
   std::map<std::string, std::vector<double>> col;
   void add(const System& sys, const Measurements& m, double d_mean, double phase) {
-    const double kn = sys.model().kn;
+    const double kn = sys.model().normal.table.p[0][0].kn;
     const double vals[] = {sys.time(), static_cast<double>(sys.steps()), m.phi, m.pressure,
                            m.pressure * d_mean / kn, m.z, m.z_corrected,
                            m.rattlers / sys.particles().n, m.ekin, m.epot,
@@ -63,9 +63,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   const double phi_end = scene.real("compression.phi_end");
   const double rate = scene.real("compression.volumetric_strain_rate");
   const long relax_steps = scene.integer("compression.relax_steps", 0);
-  LinearNormal model;
-  model.kn = scene.real("contact.kn");
-  model.gn = scene.real("contact.gamma_n");
+  const double kn = scene.real("contact.kn"), gn = scene.real("contact.gamma_n");
+  const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
   DemParams params;
   params.dt = scene.real("run.dt");
   params.skin = scene.real("run.skin");
@@ -149,7 +148,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       sys.check_health(m);
       series.add(sys, m, d_mean, compressing ? 0 : 1);
       char extra[96];
-      std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi, m.pressure * d_mean / model.kn,
+      std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi, m.pressure * d_mean / kn,
                     m.z_corrected);
       progress.update(sys.steps() - step0, extra);
       if (sys.steps() / checkpoint_every != (sys.steps() - n) / checkpoint_every) save_checkpoint();
@@ -164,7 +163,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   series.write(h5, "/series");
   write_state(h5, "/final_state", sys.particles(), sys.box(), gas.density);
   h5.attribute("/", "scene", std::string("isotropic_compression"));
-  h5.attribute("/", "kn", model.kn);
+  h5.attribute("/", "kn", kn);
   h5.attribute("/", "mean_diameter", d_mean);
   h5.commit();
   write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state", sys.particles().n);
@@ -192,7 +191,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   res["simulated_time"] = sys.time();
   res["phi_final"] = fin.phi;
   res["pressure_final"] = fin.pressure;
-  res["pressure_star_final"] = fin.pressure * d_mean / model.kn;
+  res["pressure_star_final"] = fin.pressure * d_mean / kn;
   res["z_final"] = fin.z;
   res["z_corrected_final"] = fin.z_corrected;
   res["rattler_fraction_final"] = fin.rattlers / gas.count;

@@ -11,16 +11,16 @@
 namespace granular {
 
 void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
-  LinearNormal model;
-  model.kn = scene.real("contact.kn");
-  model.gn = scene.real("contact.gamma_n");
+  const double kn = scene.real("contact.kn"), gn = scene.real("contact.gamma_n");
+  const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
+  const LinearNormal& normal = model.normal;
   const double density = scene.real("particles.density");
   const double d1 = scene.real("particles.diameter");
   const auto partners = scene.reals("particles.partner_diameters");
   const auto speeds = scene.reals("collisions.impact_speeds");
   const long resolution = scene.integer("collisions.steps_per_contact", 1000);
-  scene.require(model.kn > 0, "contact.kn", "must be positive");
-  scene.require(model.gn >= 0, "contact.gamma_n", "must not be negative");
+  scene.require(kn > 0, "contact.kn", "must be positive");
+  scene.require(gn >= 0, "contact.gamma_n", "must not be negative");
   scene.require(density > 0, "particles.density", "must be positive");
   scene.require(d1 > 0, "particles.diameter", "must be positive");
   for (double d : partners) scene.require(d > 0, "particles.partner_diameters", "must be positive");
@@ -49,9 +49,9 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
       s.record = true;
       const double m1 = density * M_PI / 6 * d1 * d1 * d1, m2 = density * M_PI / 6 * d2 * d2 * d2;
       const double m_red = m1 * m2 / (m1 + m2);
-      s.dt = model.contact_duration(m_red) / resolution;
+      s.dt = normal.contact_duration(m_red) / resolution;
       const auto r = collide_head_on<Kokkos::DefaultExecutionSpace>(model, s);
-      const double tc = model.contact_duration(m_red), e = model.restitution(m_red);
+      const double tc = normal.contact_duration(m_red), e = normal.restitution(m_red);
       const double dp = std::fabs(r.momentum_after - r.momentum_before) / std::fabs(r.momentum_before);
       Json c = Json::object();
       c["diameter_1"] = d1, c["diameter_2"] = d2, c["mass_ratio_m2_m1"] = m2 / m1;

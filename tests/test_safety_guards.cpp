@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/output.hpp"
-#include "kernels/contact_linear.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/packing.hpp"
 
@@ -25,7 +25,7 @@ HostParticles small_gas(PeriodicBox& box, double speed) {
 TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
   PeriodicBox box;
   const HostParticles h = small_gas(box, 0.0);
-  LinearNormal model{1e5, 1000};
+  const auto model = frictionless_linear(1e5, 1000);
   // Lightest pair: two smallest spheres in the gas (d close to 1).
   double m0 = 1e300, m1 = 1e300;
   for (int i = 0; i < h.size(); ++i) {
@@ -33,14 +33,14 @@ TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
     if (m < m0) m1 = m0, m0 = m;
     else if (m < m1) m1 = m;
   }
-  const double limit = 0.1 * model.contact_duration(m0 * m1 / (m0 + m1));
+  const double limit = 0.1 * model.normal.contact_duration(m0 * m1 / (m0 + m1));
   DemParams prm;
   prm.skin = 0.2;
   prm.dt = 0.99 * limit;
-  EXPECT_NO_THROW((DemSystem<Exec, LinearNormal>(Particles<Exec>::from_host(h), box, model, prm)));
+  EXPECT_NO_THROW((DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(h), box, model, prm)));
   prm.dt = 1.01 * limit;
   try {
-    DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, model, prm);
+    DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, model, prm);
     FAIL() << "time step above t_c/10 accepted";
   } catch (const PhysicsError& e) {
     EXPECT_NE(std::string(e.what()).find("set dt <="), std::string::npos) << e.what();
@@ -50,10 +50,10 @@ TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
 TEST(SafetyGuards, ViolentCollisionsStopTheRunWithRunawayMessage) {
   PeriodicBox box;
   const HostParticles h = small_gas(box, 2.0);  // 2 mm/us: overlaps far beyond binary contacts
-  LinearNormal model{1e5, 0};
+  const auto model = frictionless_linear(1e5, 0);
   DemParams prm;
   prm.skin = 0.2, prm.dt = 0.004;
-  DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, model, prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, model, prm);
   bool stopped = false;
   for (int k = 0; k < 200 && !stopped; ++k) {
     sys.step(10);
@@ -72,7 +72,7 @@ TEST(SafetyGuards, GentleGasPassesTheHealthCheck) {
   const HostParticles h = small_gas(box, 0.001);
   DemParams prm;
   prm.skin = 0.2, prm.dt = 0.004;
-  DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, LinearNormal{1e5, 1000}, prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(1e5, 1000), prm);
   sys.step(500);
   EXPECT_NO_THROW(sys.check_health(sys.measure()));
 }

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <vector>
 
-#include "kernels/contact_linear.hpp"
+#include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/packing.hpp"
 
@@ -28,10 +28,10 @@ Trace run_short_compression() {
   g.speed = 0.01, g.seed = 3;
   PeriodicBox box;
   const HostParticles h = random_gas(g, box);
-  LinearNormal model{1e5, 1000};
+  const auto model = frictionless_linear(1e5, 1000);
   DemParams prm;
   prm.dt = 0.004, prm.skin = 0.2, prm.damping.translational = 100;
-  DemSystem<Exec, LinearNormal> sys(Particles<Exec>::from_host(h), box, model, prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, model, prm);
   sys.set_strain_rate(-1.5e-2, -1.5e-2, -1.5e-2);  // to phi ~ 0.64
   Trace t;
   for (int k = 0; k < 10; ++k) {

@@ -15,9 +15,7 @@ class TwoParticleTest : public ::testing::Test {};
 TYPED_TEST_SUITE(TwoParticleTest, granular::testing::ExecSpaces);
 
 TYPED_TEST(TwoParticleTest, LinearCollisionMatchesClosedFormDurationAndRestitution) {
-  LinearNormal model;
-  model.kn = 1e5;
-  model.gn = 1000;
+  const auto model = frictionless_linear(1e5, 1000);
   const double density = 2000;
   for (double d2 : {1.0, 2.0, 3.0}) {
     for (double speed : {0.002, 0.03, 0.1}) {
@@ -25,9 +23,9 @@ TYPED_TEST(TwoParticleTest, LinearCollisionMatchesClosedFormDurationAndRestituti
       s.radius1 = 1.0, s.radius2 = 0.5 * d2, s.density = density, s.speed = speed;
       const double m1 = density * 4.0 / 3 * M_PI, m2 = density * M_PI / 6 * d2 * d2 * d2;
       const double m = m1 * m2 / (m1 + m2);
-      s.dt = model.contact_duration(m) / 1000;
+      s.dt = model.normal.contact_duration(m) / 1000;
       const auto r = collide_head_on<TypeParam>(model, s);
-      const double tc = model.contact_duration(m), e = model.restitution(m);
+      const double tc = model.normal.contact_duration(m), e = model.normal.restitution(m);
       EXPECT_NEAR(r.duration / tc, 1.0, 1e-3) << "d2 " << d2 << " v " << speed;
       EXPECT_NEAR(r.restitution / e, 1.0, 1e-3) << "d2 " << d2 << " v " << speed;
       // Internal forces only: momentum is conserved up to round-off of the sums.
@@ -37,13 +35,11 @@ TYPED_TEST(TwoParticleTest, LinearCollisionMatchesClosedFormDurationAndRestituti
 }
 
 TYPED_TEST(TwoParticleTest, UndampedCollisionEnergyErrorShrinksAsDtSquared) {
-  LinearNormal model;
-  model.kn = 1e5;
-  model.gn = 0.0;
+  const auto model = frictionless_linear(1e5, 0.0);
   CollisionSetup s;
   s.radius1 = 1.0, s.radius2 = 0.75, s.density = 2000, s.speed = 0.05;
   const double m1 = 2000 * 4.0 / 3 * M_PI, m2 = m1 * 0.421875;
-  const double tc = model.contact_duration(m1 * m2 / (m1 + m2));
+  const double tc = model.normal.contact_duration(m1 * m2 / (m1 + m2));
   s.dt = tc / 50;
   const auto coarse = collide_head_on<TypeParam>(model, s);
   s.dt = tc / 100;

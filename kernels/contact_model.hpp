@@ -1,0 +1,87 @@
+// A contact model = normal law + tangential law + rolling/torsion law, composed at compile
+// time so a scene pays only for the physics it switches on: no history storage, no
+// rotational degrees of freedom and no extra loads when a part is absent.
+#pragma once
+#include <Kokkos_Core.hpp>
+
+#include "kernels/contact_hertz.hpp"
+#include "kernels/contact_hysteretic.hpp"
+#include "kernels/contact_linear.hpp"
+#include "kernels/contact_state.hpp"
+#include "kernels/contact_tangential.hpp"
+
+namespace granular {
+
+struct PairForce {
+  double fn = 0;        // normal force (positive: repulsive)
+  double f[3] = {};     // total force on i
+  double ft[3] = {};    // tangential part of f
+  double q[3] = {};     // torque on i
+};
+
+template <class Normal, class Tangential = NoTangential, class Rolling = NoRolling>
+struct ContactModel {
+  using normal_type = Normal;
+  using tangential_type = Tangential;
+  using rolling_type = Rolling;
+  static constexpr int normal_offset = 0;
+  static constexpr int tangential_offset = Normal::history;
+  static constexpr int rolling_offset = Normal::history + Tangential::history;
+  static constexpr int history = Normal::history + Tangential::history + Rolling::history;
+  // Torques exist only if something tangential acts; otherwise rotations are not integrated.
+  static constexpr bool rotations = Tangential::active || Rolling::active;
+
+  Normal normal;
+  Tangential tangential;
+  Rolling rolling;
+
+  // Full evaluation for one step of length dt: advances the history in h.
+  KOKKOS_INLINE_FUNCTION void evaluate(const PairState& s, double dt, double* h, PairForce& out) const {
+    out.fn = normal.force(s, h + normal_offset);
+    for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
+    if constexpr (Tangential::active) {
+      tangential.force(s, out.fn, dt, h + tangential_offset, out.ft);
+      double arm[3], q[3];
+      for (int d = 0; d < 3; ++d) {
+        out.f[d] += out.ft[d];
+        arm[d] = -s.ai * s.n[d];  // contact point seen from i's centre
+      }
+      cross3(arm, out.ft, q);
+      for (int d = 0; d < 3; ++d) out.q[d] = q[d];
+    }
+    if constexpr (Rolling::active) rolling.torque(s, out.fn, dt, h + rolling_offset, out.q);
+  }
+
+  // Static (elastic) forces of the current state, history untouched: for stress and energy.
+  KOKKOS_INLINE_FUNCTION void elastic(const PairState& s, const double* h, PairForce& out) const {
+    out.fn = normal.elastic_force(s, h + normal_offset);
+    for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
+    if constexpr (Tangential::active) {
+      tangential.elastic_force(s, out.fn, h + tangential_offset, out.ft);
+      for (int d = 0; d < 3; ++d) out.f[d] += out.ft[d];
+    }
+  }
+  KOKKOS_INLINE_FUNCTION double energy(const PairState& s, const double* h) const {
+    double e = normal.energy(s, h + normal_offset);
+    if constexpr (Tangential::active) e += tangential.energy(s, h + tangential_offset);
+    if constexpr (Rolling::active) e += rolling.energy(s, h + rolling_offset);
+    return e;
+  }
+
+  // Host-side facts for the guards.
+  double stiffness(double delta_ref, double length_max) const {
+    double k = normal.stiffness(delta_ref, length_max);
+    if constexpr (Tangential::active) k = std::max(k, tangential.stiffness(delta_ref, length_max));
+    return k;
+  }
+  double shortest_duration(double m, double delta_ref, double length_max) const {
+    return normal.shortest_duration(m, delta_ref, length_max);
+  }
+};
+
+using FrictionlessLinear = ContactModel<LinearNormal>;
+inline FrictionlessLinear frictionless_linear(double kn, double gn) {
+  return {LinearNormal::uniform(kn, gn), {}, {}};
+}
+
+}  // namespace granular

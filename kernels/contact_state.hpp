@@ -1,0 +1,78 @@
+// What a contact model sees of one pair (geometry, relative motion, species) and the
+// species-pair parameter table every model carries. Vector helpers are written so that
+// swapping i and j negates results exactly, which keeps the two copies of a contact's
+// history in the full neighbour list exact mirror images.
+#pragma once
+#include <Kokkos_Core.hpp>
+
+namespace granular {
+
+constexpr int kMaxSpecies = 4;
+
+// Parameters per ordered species pair; symmetric by construction on the host.
+template <class P>
+struct PairTable {
+  P p[kMaxSpecies][kMaxSpecies];
+  KOKKOS_INLINE_FUNCTION const P& operator()(int si, int sj) const { return p[si][sj]; }
+  static PairTable uniform(const P& v) {
+    PairTable t;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) t.p[a][b] = v;
+    return t;
+  }
+};
+
+struct PairState {
+  double n[3];       // unit normal, from j towards i
+  double delta;      // overlap (> 0 in contact)
+  double delta_dot;  // rate of overlap (approach speed)
+  double vt[3];      // tangential velocity of i's contact point relative to j's
+  double wrel[3];    // omega_i - omega_j
+  double ai, aj;     // radii
+  int si, sj;        // species
+};
+
+KOKKOS_INLINE_FUNCTION double dot3(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+KOKKOS_INLINE_FUNCTION void cross3(const double a[3], const double b[3], double c[3]) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+KOKKOS_INLINE_FUNCTION double norm3(const double a[3]) {
+  return Kokkos::Experimental::sqrt(dot3(a, a));
+}
+
+// A spring vector kept in the tangent plane as the contact rotates: project out the normal
+// component and restore the length, so rotation alone stores no energy.
+KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
+  const double len = norm3(s);
+  if (len == 0.0) return;
+  const double sn = dot3(s, n);
+  for (int d = 0; d < 3; ++d) s[d] -= sn * n[d];
+  const double len2 = norm3(s);
+  if (len2 > 0.0)
+    for (int d = 0; d < 3; ++d) s[d] *= len / len2;
+}
+
+// Spring-dashpot with a Coulomb limit, shared by sliding, rolling and torsion:
+// trial f = -k s - g v; if |f| > mu_s * fn the contact slips, f becomes mu_d * fn along
+// the trial direction and the spring is shortened to match it. Returns the force in f.
+// mu_s = infinity never slips. fn <= 0 (a tensile normal force) allows no friction.
+KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], double k, double g,
+                                           double mu_s, double mu_d, double fn, double f[3]) {
+  for (int d = 0; d < 3; ++d) f[d] = -k * s[d] - g * v[d];
+  const double fmag = norm3(f);
+  const double limit = fn > 0.0 ? mu_s * fn : 0.0;
+  if (fmag <= limit) return false;
+  const double slide = fn > 0.0 ? mu_d * fn : 0.0;
+  const double scale = fmag > 0.0 ? slide / fmag : 0.0;
+  for (int d = 0; d < 3; ++d) {
+    f[d] *= scale;
+    s[d] = k > 0.0 ? -(f[d] + g * v[d]) / k : 0.0;
+  }
+  return true;
+}
+
+}  // namespace granular
