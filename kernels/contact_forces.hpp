@@ -40,9 +40,12 @@ KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, con
   const double vn = dot3(dv, s.n);
   s.delta_dot = -vn;
   if (rotations) {
-    // Contact-point velocities: v_i - a_i w_i x n minus v_j + a_j w_j x n.
-    const double aw[3] = {s.ai * v.w(i, 0) + s.aj * v.w(j, 0), s.ai * v.w(i, 1) + s.aj * v.w(j, 1),
-                          s.ai * v.w(i, 2) + s.aj * v.w(j, 2)};
+    // Contact point in the middle of the overlap, at lever arms a - delta/2 from both
+    // centres: then the torques of a tangential force balance exactly and angular
+    // momentum is conserved. Contact-point velocity v_i - l_i w_i x n minus v_j + l_j w_j x n.
+    const double li = s.ai - 0.5 * s.delta, lj = s.aj - 0.5 * s.delta;
+    const double aw[3] = {li * v.w(i, 0) + lj * v.w(j, 0), li * v.w(i, 1) + lj * v.w(j, 1),
+                          li * v.w(i, 2) + lj * v.w(j, 2)};
     double c[3];
     cross3(aw, s.n, c);
     for (int d = 0; d < 3; ++d) {

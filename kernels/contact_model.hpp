@@ -44,7 +44,7 @@ struct ContactModel {
       double arm[3], q[3];
       for (int d = 0; d < 3; ++d) {
         out.f[d] += out.ft[d];
-        arm[d] = -s.ai * s.n[d];  // contact point seen from i's centre
+        arm[d] = -(s.ai - 0.5 * s.delta) * s.n[d];  // contact point (mid-overlap) from i's centre
       }
       cross3(arm, out.ft, q);
       for (int d = 0; d < 3; ++d) out.q[d] = q[d];

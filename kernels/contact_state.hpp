@@ -59,14 +59,15 @@ KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
 // Spring-dashpot with a Coulomb limit, shared by sliding, rolling and torsion:
 // trial f = -k s - g v; if |f| > mu_s * fn the contact slips, f becomes mu_d * fn along
 // the trial direction and the spring is shortened to match it. Returns the force in f.
-// mu_s = infinity never slips. fn <= 0 (a tensile normal force) allows no friction.
+// mu_s = infinity never slips. The limit uses |fn| as the spec writes it (the normal force
+// includes its dashpot, which is briefly tensile at the end of a damped collision).
 KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], double k, double g,
                                            double mu_s, double mu_d, double fn, double f[3]) {
   for (int d = 0; d < 3; ++d) f[d] = -k * s[d] - g * v[d];
   const double fmag = norm3(f);
-  const double limit = fn > 0.0 ? mu_s * fn : 0.0;
-  if (fmag <= limit) return false;
-  const double slide = fn > 0.0 ? mu_d * fn : 0.0;
+  const double afn = fn < 0.0 ? -fn : fn;
+  if (fmag <= mu_s * afn) return false;  // also true for mu_s = infinity
+  const double slide = mu_d * afn;
   const double scale = fmag > 0.0 ? slide / fmag : 0.0;
   for (int d = 0; d < 3; ++d) {
     f[d] *= scale;

@@ -15,6 +15,8 @@ struct CollisionSetup {
   double radius1 = 1.0, radius2 = 1.0;
   double density = 1.0;
   double speed = 1.0;  // sphere 1 moves at +speed towards sphere 2 at rest
+  double tangential_speed = 0.0;  // and at this speed along y (oblique impact)
+  double spin = 0.0;              // angular velocity of sphere 1 about z
   double dt = 1e-3;
   bool record = false;  // keep the overlap/force/energy series
 };
@@ -24,9 +26,13 @@ struct CollisionResult {
   double restitution = 0;  // measured normal restitution
   double momentum_before = 0, momentum_after = 0;  // x-momentum (y, z stay exactly 0)
   double max_energy_error = 0;  // max |E(t) - E(0)| / E(0) over the run (meaningful if undamped)
+  double slip_before = 0, slip_after = 0;  // y-velocity of 1's contact point relative to 2's
+  double vy_rel_before = 0, vy_rel_after = 0;  // relative y-velocity of the centres
+  double angular_momentum_before[3] = {}, angular_momentum_after[3] = {};  // about the centre of mass
   double mass1 = 0, mass2 = 0;
   long steps = 0;
   std::vector<double> t, delta, force, energy;
+  std::vector<double> force_normal, force_tangential;  // on sphere 2, split along the actual normal
 };
 
 template <class ExecSpace, class Model>
@@ -43,6 +49,7 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   h.y = {0.5 * edge, 0.5 * edge};
   h.z = {0.5 * edge, 0.5 * edge};
   h.vx = {s.speed, 0.0};
+  h.vy = {s.tangential_speed, 0.0};
   h.radius = {s.radius1, s.radius2};
   h.density = {s.density, s.density};
 
@@ -51,10 +58,18 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   params.skin = 0.1 * sum;
   params.max_overlap = 1.0;
   DemSystem<ExecSpace, Model> sys(Particles<ExecSpace>::from_host(h), box, model, params);
+  if (s.spin != 0.0) {
+    auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().w);
+    w(0, 2) = s.spin;
+    Kokkos::deep_copy(sys.particles().w, w);
+    sys.refresh_forces();
+  }
 
   auto xh = Kokkos::create_mirror_view(sys.particles().x);
   auto vh = Kokkos::create_mirror_view(sys.particles().v);
   auto fh = Kokkos::create_mirror_view(sys.particles().f);
+  auto wh = Kokkos::create_mirror_view(sys.particles().w);
+  auto ih = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().inertia);
   auto mh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().mass);
   CollisionResult r;
   r.mass1 = mh(0), r.mass2 = mh(1);
@@ -69,7 +84,31 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
     const Measurements m = sys.measure();
     e = m.ekin + m.epot;
   };
+  // Slip of the contact points (lever arms at mid-overlap, as in the force kernel) and the
+  // angular momentum about the centre of mass.
+  auto kinematics = [&](double& slip, double& vy_rel, double L[3]) {
+    Kokkos::deep_copy(xh, sys.particles().x);
+    Kokkos::deep_copy(vh, sys.particles().v);
+    Kokkos::deep_copy(wh, sys.particles().w);
+    const double dx = sys.box().min_image(xh(1, 0) - xh(0, 0), 0);
+    const double delta = std::max(0.0, sum - std::fabs(dx));
+    const double l0 = s.radius1 - 0.5 * delta, l1 = s.radius2 - 0.5 * delta;
+    // Contact point velocities along y for the normal along x: v_y + w_z * (offset along x).
+    slip = (vh(0, 1) + wh(0, 2) * l0) - (vh(1, 1) - wh(1, 2) * l1);
+    vy_rel = vh(0, 1) - vh(1, 1);
+    const double M = mh(0) + mh(1);
+    double X[3];
+    for (int d = 0; d < 3; ++d) X[d] = (mh(0) * xh(0, d) + mh(1) * xh(1, d)) / M, L[d] = 0;
+    for (int i = 0; i < 2; ++i) {
+      const double r[3] = {xh(i, 0) - X[0], xh(i, 1) - X[1], xh(i, 2) - X[2]};
+      const double p[3] = {mh(i) * vh(i, 0), mh(i) * vh(i, 1), mh(i) * vh(i, 2)};
+      double c[3];
+      cross3(r, p, c);
+      for (int d = 0; d < 3; ++d) L[d] += c[d] + ih(i) * wh(i, d);
+    }
+  };
   double delta, vrel, p, e0;
+  kinematics(r.slip_before, r.vy_rel_before, r.angular_momentum_before);
   sample(delta, vrel, p, e0);
   r.momentum_before = p;
   const double v_in = vrel;
@@ -87,6 +126,13 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
       r.t.push_back(t);
       r.delta.push_back(delta);
       r.force.push_back(fh(1, 0));  // force on the sphere at rest, along the line of centres
+      const double nx = xh(1, 0) - xh(0, 0), ny = xh(1, 1) - xh(0, 1), nz = xh(1, 2) - xh(0, 2);
+      const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+      const double fn = (fh(1, 0) * nx + fh(1, 1) * ny + fh(1, 2) * nz) / len;
+      const double ftx = fh(1, 0) - fn * nx / len, fty = fh(1, 1) - fn * ny / len,
+                   ftz = fh(1, 2) - fn * nz / len;
+      r.force_normal.push_back(delta > 0 ? fn : 0.0);
+      r.force_tangential.push_back(delta > 0 ? std::sqrt(ftx * ftx + fty * fty + ftz * ftz) : 0.0);
       r.energy.push_back(e);
     }
     r.max_energy_error = std::max(r.max_energy_error, std::fabs(e - e0) / e0);
@@ -100,6 +146,7 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
     }
     prev_delta = delta;
   }
+  kinematics(r.slip_after, r.vy_rel_after, r.angular_momentum_after);
   r.duration = t_end - t_start;
   r.restitution = -v_out / v_in;
   r.momentum_after = p;
