@@ -10,6 +10,8 @@ const std::vector<SceneEntry>& scene_registry() {
        run_two_particle_linear},
       {"isotropic_compression", "isotropic compression of a polydisperse gas to a dense packing",
        run_isotropic_compression},
+      {"hysteretic_collision", "head-on collisions with the hysteretic adhesive contact law",
+       run_hysteretic_collision},
       // chain scenes
   };
   return entries;

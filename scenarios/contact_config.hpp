@@ -1,0 +1,57 @@
+// Contact physics chosen in a scene file ([contact] table) and turned into the compile-time
+// model type: `with_contact_model(config, f)` calls f with a ContactModel<Normal, Tangential,
+// Rolling> instance, so each combination runs its own specialised kernels.
+#pragma once
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/scene_file.hpp"
+#include "kernels/contact_model.hpp"
+
+namespace granular {
+
+struct ContactConfig {
+  std::string normal = "linear";      // linear | hertz | hysteretic
+  std::string tangential = "none";    // none | coulomb
+  bool rolling = false;
+  LinearNormal::Params linear;
+  HertzNormal::Params hertz;
+  HystereticNormal::Params hysteretic;
+  CoulombTangential::Params coulomb;
+  RollingTorsion::Params rolling_params;
+
+  // Reads [contact] from a scene; every key is checked, unknown ones are reported later.
+  static ContactConfig read(const SceneFile& scene);
+};
+
+// Harmonic ("product over sum") mixing, normalised so that a species paired with itself
+// keeps its own value: p_ij = 2 p_i p_j / (p_i + p_j).
+inline double harmonic_pair(double pi, double pj) {
+  return (pi + pj) > 0 ? 2.0 * pi * pj / (pi + pj) : 0.0;
+}
+
+template <class F>
+void with_contact_model(const ContactConfig& c, F&& f) {
+  auto with_normal = [&](auto normal) {
+    auto with_tangential = [&](auto tangential) {
+      if (c.rolling) {
+        f(ContactModel<decltype(normal), decltype(tangential), RollingTorsion>{
+            normal, tangential, RollingTorsion::uniform(c.rolling_params)});
+      } else {
+        f(ContactModel<decltype(normal), decltype(tangential), NoRolling>{normal, tangential, {}});
+      }
+    };
+    if (c.tangential == "coulomb") {
+      with_tangential(CoulombTangential{PairTable<CoulombTangential::Params>::uniform(c.coulomb)});
+    } else {
+      with_tangential(NoTangential{});
+    }
+  };
+  if (c.normal == "linear") with_normal(LinearNormal{PairTable<LinearNormal::Params>::uniform(c.linear)});
+  else if (c.normal == "hertz") with_normal(HertzNormal{PairTable<HertzNormal::Params>::uniform(c.hertz)});
+  else with_normal(HystereticNormal{PairTable<HystereticNormal::Params>::uniform(c.hysteretic)});
+}
+
+}  // namespace granular
