@@ -32,7 +32,8 @@ KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, con
   const double r2 = rx * rx + ry * ry + rz * rz;
   if (r2 >= sum * sum) return false;  // reject before the sqrt
   const double r = Kokkos::Experimental::sqrt(r2);
-  s.n[0] = rx / r, s.n[1] = ry / r, s.n[2] = rz / r;
+  const double inv = 1.0 / r;
+  s.n[0] = rx * inv, s.n[1] = ry * inv, s.n[2] = rz * inv;
   s.delta = sum - r;
   s.si = v.species(i), s.sj = v.species(j);
   double dv[3] = {v.v(i, 0) - v.v(j, 0) + rate[0] * rx, v.v(i, 1) - v.v(j, 1) + rate[1] * ry,
@@ -92,9 +93,14 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
           PairState s;
           double h[H > 0 ? H : 1];
           if (!pair_state(pv, b, r3, rot, i, neighbors(k), s)) {
-            // Contact ended (or never began): its history is forgotten.
-            if constexpr (H > 0)
-              for (int c = 0; c < H; ++c) history(k, c) = 0.0;
+            // Contact ended (or never began): its history is forgotten. Most such slots are
+            // already zero; reading is cheaper than rewriting them every step.
+            if constexpr (H > 0) {
+              bool stale = false;
+              for (int c = 0; c < H; ++c) stale = stale || history(k, c) != 0.0;
+              if (stale)
+                for (int c = 0; c < H; ++c) history(k, c) = 0.0;
+            }
             continue;
           }
           if constexpr (H > 0)

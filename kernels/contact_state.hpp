@@ -46,14 +46,17 @@ KOKKOS_INLINE_FUNCTION double norm3(const double a[3]) {
 
 // A spring vector kept in the tangent plane as the contact rotates: project out the normal
 // component and restore the length, so rotation alone stores no energy.
+// The spring was in last step's plane, so the normal part x = (s.n)^2/|s|^2 is tiny and the
+// restoring factor 1/sqrt(1 - x) is its Taylor series (exact to round-off for x < 1e-4):
+// no square root in the common case.
 KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
-  const double len = norm3(s);
-  if (len == 0.0) return;
+  const double len_sq = dot3(s, s);
+  if (len_sq == 0.0) return;
   const double sn = dot3(s, n);
-  for (int d = 0; d < 3; ++d) s[d] -= sn * n[d];
-  const double len2 = norm3(s);
-  if (len2 > 0.0)
-    for (int d = 0; d < 3; ++d) s[d] *= len / len2;
+  const double x = sn * sn / len_sq;
+  const double scale =
+      x < 1e-4 ? 1.0 + x * (0.5 + x * (0.375 + x * 0.3125)) : 1.0 / Kokkos::Experimental::sqrt(1.0 - x);
+  for (int d = 0; d < 3; ++d) s[d] = (s[d] - sn * n[d]) * scale;
 }
 
 // Spring-dashpot with a Coulomb limit, shared by sliding, rolling and torsion:
@@ -64,9 +67,11 @@ KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
 KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], double k, double g,
                                            double mu_s, double mu_d, double fn, double f[3]) {
   for (int d = 0; d < 3; ++d) f[d] = -k * s[d] - g * v[d];
-  const double fmag = norm3(f);
+  const double f_sq = dot3(f, f);
   const double afn = fn < 0.0 ? -fn : fn;
-  if (fmag <= mu_s * afn) return false;  // also true for mu_s = infinity
+  const double limit = mu_s * afn;
+  if (f_sq <= limit * limit) return false;  // no square root while sticking; mu_s = inf sticks
+  const double fmag = Kokkos::Experimental::sqrt(f_sq);
   const double slide = mu_d * afn;
   const double scale = fmag > 0.0 ? slide / fmag : 0.0;
   for (int d = 0; d < 3; ++d) {

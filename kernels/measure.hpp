@@ -15,6 +15,7 @@ namespace granular {
 
 struct Measurements {
   double ekin = 0;        // translational + rotational kinetic energy
+  double ekin_rot = 0;    // its rotational part
   double epot = 0;        // elastic energy stored in contacts
   double stress[6] = {};  // xx yy zz xy xz yz; static (contact) part, positive in compression
   double stress_normal[6] = {};      // the same sum with normal contact forces only
@@ -34,8 +35,8 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
                      const HistoryView& history, const PeriodicBox& box, const Model& model,
                      int rattler_threshold, double particle_volume) {
   // Columns: ekin, epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers,
-  // normal-force stress (6), tangential-force stress (6).
-  constexpr int NC = 23;
+  // normal-force stress (6), tangential-force stress (6), rotational kinetic energy.
+  constexpr int NC = 24;
   constexpr int H = Model::history;
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
@@ -79,6 +80,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
         const double v2 = v(i, 0) * v(i, 0) + v(i, 1) * v(i, 1) + v(i, 2) * v(i, 2);
         const double w2 = w(i, 0) * w(i, 0) + w(i, 1) * w(i, 1) + w(i, 2) * w(i, 2);
         per(i, 0) = 0.5 * mass(i) * v2 + 0.5 * inertia(i) * w2;
+        per(i, 23) = 0.5 * inertia(i) * w2;
         per(i, 1) = epot;
         for (int q = 0; q < 6; ++q) {
           per(i, 2 + q) = sn[q] + st[q];
@@ -94,6 +96,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   Measurements out;
   out.volume = box.volume();
   out.ekin = sums[0];
+  out.ekin_rot = sums[23];
   out.epot = sums[1];
   for (int q = 0; q < 6; ++q) {
     out.stress[q] = sums[2 + q] / out.volume;

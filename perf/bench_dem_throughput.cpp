@@ -3,7 +3,14 @@
 // measured in the same run. Thread count comes from --kokkos-threads; run once per count.
 //
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
-//                        [--data packing.data] [--out perf/results/dem_throughput_2t.json]
+//                        [--physics frictionless,friction,...|all] [--data packing.data]
+//                        [--out perf/results/dem_throughput_2t.json]
+// The physics options are the cost of each model switch on the same packing:
+//   frictionless   linear normal spring-dashpot only (no history, no rotations)
+//   friction       + tangential spring with history and Coulomb mu = 0.5, rotations
+//   rolling        + rolling and torsion resistance
+//   hertz_mindlin  Hertz normal + Mindlin tangential (stiffness form), mu = 0.5
+//   hysteretic     hysteretic adhesive normal law (k1/k2 = 0.666, kc = k2/2) + friction
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cmath>
@@ -19,6 +26,7 @@
 #include "kernels/dem_system.hpp"
 #include "machine_info.hpp"
 #include "scenarios/dem_output.hpp"
+#include "scenarios/contact_config.hpp"
 #include "scenarios/packing.hpp"
 
 using namespace granular;
@@ -28,9 +36,37 @@ using System = DemSystem<Exec, FrictionlessLinear>;
 namespace {
 
 // The benchmark's physics: the spec's linear set (k_n 1e5 N/mm, gamma_n 1000 ug/us
-// absolute), frictionless, no background damping, dt = 0.0045 us (t_c/50 of the smallest
-// pair), skin 0.2 mm. Units mm, us, ug.
+// absolute, k_t 8e4, gamma_t 500, mu 0.5 when frictional), no background damping,
+// dt = 0.0045 us (t_c/50 of the smallest pair), skin 0.2 mm. Units mm, us, ug.
+// These are the peer decks' parameters in SI: 1e8 N/m, 1 kg/s, 8e7 N/m, 0.5 kg/s.
 const FrictionlessLinear kModel = frictionless_linear(1e5, 1000);
+
+ContactConfig physics_config(const std::string& name) {
+  ContactConfig c;
+  c.linear = {1e5, 1000};
+  c.coulomb = {8e4, 500, 0.5, 0.5, CoulombTangential::Constant};
+  if (name == "frictionless") return c;
+  c.tangential = "coulomb";
+  if (name == "friction") return c;
+  if (name == "rolling") {
+    c.rolling = true;
+    c.rolling_params = {2e4, 100, 0.1, 2e4, 100, 0.1};
+    return c;
+  }
+  if (name == "hertz_mindlin") {
+    c.normal = "hertz";
+    c.hertz = HertzNormal::stiffness_form(29e3, 0.2, 1000);
+    c.coulomb = {2 * 29e3 / 1.8, 20, 0.5, 0.5, CoulombTangential::MindlinPairDiameter};
+    return c;
+  }
+  if (name == "hysteretic") {
+    c.normal = "hysteretic";
+    c.hysteretic = {0.666e5, 1e5, 0.5e5, 1000};
+    return c;
+  }
+  throw std::runtime_error("unknown physics '" + name +
+                           "' (frictionless, friction, rolling, hertz_mindlin, hysteretic, all)");
+}
 DemParams bench_params() {
   DemParams p;
   p.dt = 0.0045;
@@ -90,7 +126,7 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   Kokkos::initialize(argc, argv);
   {
-    std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache";
+    std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
@@ -104,6 +140,7 @@ int main(int argc, char** argv) {
       else if (a == "--steps") steps = std::stol(next());
       else if (a == "--warmup") warmup = std::stol(next());
       else if (a == "--data") data = next();
+      else if (a == "--physics") physics = next();
       else if (a == "--out") out = next();
       else if (a == "--cache") cache_dir = next();
       else if (a.rfind("--kokkos", 0) != 0) {
@@ -119,13 +156,21 @@ int main(int argc, char** argv) {
     result["benchmark"] = "dem_throughput";
     result["machine"] = perf::machine_info();
     result["triad_bandwidth_GBs"] = bandwidth / 1e9;
-    result["physics"] = "linear normal spring-dashpot (k_n 1e5, gamma_n 1000), frictionless, dt 0.0045, skin 0.2";
+    result["parameters"] = "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
     Json rows = Json::array();
 
     const std::vector<int> ns = data.empty() ? parse_sizes(sizes) : std::vector<int>{0};
-    for (int n_req : ns) {
+    std::vector<std::string> physics_list;
+    {
+      std::stringstream ss(physics == "all" ? "frictionless,friction,rolling,hertz_mindlin,hysteretic" : physics);
+      std::string item;
+      while (std::getline(ss, item, ',')) physics_list.push_back(item);
+    }
+    for (const std::string& phys : physics_list)
+    for (int n_req : ns) with_contact_model(physics_config(phys), [&](const auto& model) {
+      using Model = std::decay_t<decltype(model)>;
       PeriodicBox box;
       HostParticles host;
       std::string source;
@@ -141,11 +186,11 @@ int main(int argc, char** argv) {
       const int n = host.size();
       std::vector<double> rates;
       StepProfile prof;
-      double z_start = 0, z_end = 0, phi = 0;
+      double z_start = 0, z_end = 0, phi = 0, ekin_start = 0, ekin_end = 0, erot_start = 0, erot_end = 0;
       long builds = 0;
       double entries = 0;
       for (int r = 0; r < reps; ++r) {
-        System sys(Particles<Exec>::from_host(host), box, kModel, bench_params());
+        DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, bench_params());
         sys.step(warmup);
         const Measurements m0 = sys.measure();
         const long builds0 = sys.neighbor_list().builds();
@@ -157,6 +202,7 @@ int main(int argc, char** argv) {
         rates.push_back(static_cast<double>(n) * steps / sec);
         const Measurements m1 = sys.measure();
         z_start = m0.z, z_end = m1.z, phi = m1.phi;
+        ekin_start = m0.ekin, ekin_end = m1.ekin, erot_start = m0.ekin_rot, erot_end = m1.ekin_rot;
         builds = sys.neighbor_list().builds() - builds0;
         entries = sys.neighbor_list().num_entries();
         if (r == 0) {  // one extra profiled window, not part of the timed figures
@@ -164,7 +210,8 @@ int main(int argc, char** argv) {
           sys.step(std::min(steps, 500L));
           sys.set_profile(nullptr);
         }
-        std::cerr << "N " << n << " rep " << r << ": " << rates.back() / 1e6 << " M particle-steps/s\n";
+        std::cerr << phys << " N " << n << " rep " << r << ": " << rates.back() / 1e6
+                  << " M particle-steps/s\n";
       }
       // Bytes a particle-step touches, counted from the data the kernels read and write
       // (each access once; neighbour data that hits cache still counts).
@@ -175,12 +222,19 @@ int main(int argc, char** argv) {
       const double med = median(rates);
       const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
       Json row = Json::object();
+      row["physics"] = phys;
       row["N"] = n;
       row["source"] = source;
       row["threads"] = threads;
       row["phi"] = phi;
       row["z_start"] = z_start;
       row["z_end"] = z_end;
+      // Energy unit ug mm^2 / us^2 = 1e-3 J. Translational part separately: that is what
+      // LAMMPS reports as `ke`.
+      row["ekin_after_warmup_J"] = ekin_start * 1e-3;
+      row["ekin_after_timed_run_J"] = ekin_end * 1e-3;
+      row["ekin_translational_after_warmup_J"] = (ekin_start - erot_start) * 1e-3;
+      row["ekin_translational_after_timed_run_J"] = (ekin_end - erot_end) * 1e-3;
       row["neighbors_per_particle_full_list"] = nb;
       row["neighbor_builds_in_timed_window"] = builds;
       row["particle_steps_per_s"] = rates;
@@ -195,10 +249,10 @@ int main(int argc, char** argv) {
       split["strain"] = prof.strain / prof_total;
       row["profile_fraction"] = split;
       rows.push(row);
-      std::cout << "N " << n << " threads " << threads << ": median " << med / 1e6
+      std::cout << phys << " N " << n << " threads " << threads << ": median " << med / 1e6
                 << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step, "
                 << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9 << " GB/s\n";
-    }
+    });
     result["rows"] = rows;
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
     write_text_file(out, result.dump());
