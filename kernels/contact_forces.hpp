@@ -1,8 +1,5 @@
 // Contact and background-damping forces: one generic loop over the neighbour list,
 // templated on the contact model (the model struct holds the physics of one pair).
-// Each particle sums its own forces in list order (full list: no atomics, reproducible),
-// and advances its own copy of each contact's history; the two copies of a contact stay
-// exact mirror images because every formula is antisymmetric in (i, j) to the last bit.
 #pragma once
 #include <Kokkos_Core.hpp>
 
@@ -18,26 +15,50 @@ struct Damping {
   double rotational = 0.0;     // gamma_br: q = -gamma_br omega
 };
 
-// Geometry and relative motion of pair (i, j); false when they do not touch.
-// Velocities are stored relative to the affine flow of the deforming box, so the pair's
-// affine relative velocity rate * r_ij is added here.
+// One particle's state in registers: loaded once for i, once per partner j.
+struct Body {
+  double x[3], v[3], w[3], a;
+  int s;
+};
+
 template <class Views>
-KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, const double rate[3],
-                                       bool rotations, int i, int j, PairState& s) {
-  const double rx = b.min_image(v.x(i, 0) - v.x(j, 0), 0);
-  const double ry = b.min_image(v.x(i, 1) - v.x(j, 1), 1);
-  const double rz = b.min_image(v.x(i, 2) - v.x(j, 2), 2);
-  s.ai = v.radius(i), s.aj = v.radius(j);
-  const double sum = s.ai + s.aj;
-  const double r2 = rx * rx + ry * ry + rz * rz;
-  if (r2 >= sum * sum) return false;  // reject before the sqrt
+KOKKOS_FORCEINLINE_FUNCTION Body load_body(const Views& v, int i, bool rotations) {
+  Body b;
+  for (int d = 0; d < 3; ++d) {
+    b.x[d] = v.x(i, d);
+    b.v[d] = v.v(i, d);
+    b.w[d] = rotations ? v.w(i, d) : 0.0;
+  }
+  b.a = v.radius(i);
+  b.s = v.species(i);
+  return b;
+}
+
+// Geometry and relative motion of the pair (bi, bj) if they touch (quick rejection on
+// squared distance first). Velocities are stored relative to the affine flow of the
+// deforming box, so the pair's affine relative velocity rate * r_ij is added here.
+template <class Views>
+KOKKOS_FORCEINLINE_FUNCTION bool touching(const Views& v, const PeriodicBox& b, const Body& bi,
+                                          int j, double& rx, double& ry, double& rz, double& r2) {
+  rx = b.min_image(bi.x[0] - v.x(j, 0), 0);
+  ry = b.min_image(bi.x[1] - v.x(j, 1), 1);
+  rz = b.min_image(bi.x[2] - v.x(j, 2), 2);
+  const double sum = bi.a + v.radius(j);
+  r2 = rx * rx + ry * ry + rz * rz;
+  return r2 < sum * sum;
+}
+
+KOKKOS_FORCEINLINE_FUNCTION void pair_geometry(const Body& bi, const Body& bj, double rx, double ry,
+                                               double rz, double r2, const double rate[3],
+                                               bool rotations, PairState& s) {
+  s.ai = bi.a, s.aj = bj.a;
   const double r = Kokkos::Experimental::sqrt(r2);
   const double inv = 1.0 / r;
   s.n[0] = rx * inv, s.n[1] = ry * inv, s.n[2] = rz * inv;
-  s.delta = sum - r;
-  s.si = v.species(i), s.sj = v.species(j);
-  double dv[3] = {v.v(i, 0) - v.v(j, 0) + rate[0] * rx, v.v(i, 1) - v.v(j, 1) + rate[1] * ry,
-                  v.v(i, 2) - v.v(j, 2) + rate[2] * rz};
+  s.delta = s.ai + s.aj - r;
+  s.si = bi.s, s.sj = bj.s;
+  const double dv[3] = {bi.v[0] - bj.v[0] + rate[0] * rx, bi.v[1] - bj.v[1] + rate[1] * ry,
+                        bi.v[2] - bj.v[2] + rate[2] * rz};
   const double vn = dot3(dv, s.n);
   s.delta_dot = -vn;
   if (rotations) {
@@ -45,17 +66,27 @@ KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, con
     // centres: then the torques of a tangential force balance exactly and angular
     // momentum is conserved. Contact-point velocity v_i - l_i w_i x n minus v_j + l_j w_j x n.
     const double li = s.ai - 0.5 * s.delta, lj = s.aj - 0.5 * s.delta;
-    const double aw[3] = {li * v.w(i, 0) + lj * v.w(j, 0), li * v.w(i, 1) + lj * v.w(j, 1),
-                          li * v.w(i, 2) + lj * v.w(j, 2)};
+    const double aw[3] = {li * bi.w[0] + lj * bj.w[0], li * bi.w[1] + lj * bj.w[1],
+                          li * bi.w[2] + lj * bj.w[2]};
     double c[3];
     cross3(aw, s.n, c);
     for (int d = 0; d < 3; ++d) {
       s.vt[d] = dv[d] - vn * s.n[d] - c[d];
-      s.wrel[d] = v.w(i, d) - v.w(j, d);
+      s.wrel[d] = bi.w[d] - bj.w[d];
     }
   } else {
     for (int d = 0; d < 3; ++d) s.vt[d] = dv[d] - vn * s.n[d], s.wrel[d] = 0.0;
   }
+}
+
+// Convenience for code off the hot path: the full state of pair (i, j), false if apart.
+template <class Views>
+KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, const double rate[3],
+                                       bool rotations, int i, int j, PairState& s) {
+  const Body bi = load_body(v, i, rotations);
+  double rx, ry, rz, r2;
+  if (!touching(v, b, bi, j, rx, ry, rz, r2)) return false;
+  pair_geometry(bi, load_body(v, j, rotations), rx, ry, rz, r2, rate, rotations, s);
   return true;
 }
 
@@ -69,32 +100,42 @@ struct ParticleViews {
       : x(p.x), v(p.v), w(p.w), radius(p.radius), species(p.species) {}
 };
 
-template <class ExecSpace, class Model, class HistoryView>
+// Two passes. Pairs: the owner of each contact (entry (i, j) with i < j) evaluates it once,
+// advances its history and stores the force on i and the torques on i and j. Gather: every
+// particle sums the contacts of its list in list order (owner entries directly, the others
+// through the mirror entry, with the sign of the force flipped). No atomics, half the pair
+// work of a full list, and a summation order that does not depend on threads or backend.
+// `pair` must have num_entries rows and 3 (9 with rotations) columns.
+template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                    const HistoryView& history, const PeriodicBox& box, const Model& model,
-                    const Damping& damping, const double strain_rate[3], double dt) {
+                    const HistoryView& history, const PairView& pair, const PeriodicBox& box,
+                    const Model& model, const Damping& damping, const double strain_rate[3],
+                    double dt) {
   const ParticleViews<ExecSpace> pv(p);
   auto f = p.f, torque = p.torque;
-  auto offsets = nl.offsets(), neighbors = nl.neighbors();
+  auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
   const PeriodicBox b = box;
   const Model m = model;
   const double gb = damping.translational, gr = damping.rotational;
   const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
-  constexpr int H = Model::history;
-  constexpr bool rot = Model::rotations;
+  // Compile-time switches are re-declared inside each kernel: nvcc would otherwise
+  // capture them, which extended lambdas cannot do in an if-constexpr condition.
   Kokkos::parallel_for(
-      "dem::compute_forces", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
-        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
-        double qi[3] = {0, 0, 0};
-        if (rot)
-          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+      "dem::compute_forces::pairs", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+        constexpr int H = Model::history;
+        constexpr bool rot = Model::rotations;
+        constexpr int NB = rot ? 9 : 3;
+        (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
         const double r3[3] = {rate[0], rate[1], rate[2]};
+        const Body bi = load_body(pv, i, rot);
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          PairState s;
-          double h[H > 0 ? H : 1];
-          if (!pair_state(pv, b, r3, rot, i, neighbors(k), s)) {
-            // Contact ended (or never began): its history is forgotten. Most such slots are
-            // already zero; reading is cheaper than rewriting them every step.
+          const int j = neighbors(k);
+          if (j < i) continue;  // the other particle owns this contact
+          double rx, ry, rz, r2;
+          if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
+            // Not touching: no force, and the contact's history is forgotten. Most such
+            // slots are already zero; reading is cheaper than rewriting them every step.
+            for (int c = 0; c < NB; ++c) pair(k, c) = 0.0;
             if constexpr (H > 0) {
               bool stale = false;
               for (int c = 0; c < H; ++c) stale = stale || history(k, c) != 0.0;
@@ -103,18 +144,43 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
             }
             continue;
           }
+          PairState s;
+          pair_geometry(bi, load_body(pv, j, rot), rx, ry, rz, r2, r3, rot, s);
+          double h[H > 0 ? H : 1];
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) h[c] = history(k, c);
           PairForce out;
           m.evaluate(s, dt, h, out);
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) history(k, c) = h[c];
-          for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
-          if (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
+          for (int d = 0; d < 3; ++d) pair(k, d) = out.f[d];
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) pair(k, 3 + d) = out.q[d], pair(k, 6 + d) = out.qj[d];
+        }
+      });
+  Kokkos::parallel_for(
+      "dem::compute_forces::gather", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+        constexpr bool rot = Model::rotations;
+        (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
+        (void)gr;
+        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
+        double qi[3] = {0, 0, 0};
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+        for (int k = offsets(i); k < offsets(i + 1); ++k) {
+          if (neighbors(k) > i) {
+            for (int d = 0; d < 3; ++d) fi[d] += pair(k, d);
+            if constexpr (rot)
+              for (int d = 0; d < 3; ++d) qi[d] += pair(k, 3 + d);
+          } else {
+            const int o = mirror(k);
+            for (int d = 0; d < 3; ++d) fi[d] -= pair(o, d);
+            if constexpr (rot)
+              for (int d = 0; d < 3; ++d) qi[d] += pair(o, 6 + d);
+          }
         }
         for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
-        if (rot)
+        if constexpr (rot)
           for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
       });
 }

@@ -17,6 +17,7 @@ struct PairForce {
   double f[3] = {};     // total force on i
   double ft[3] = {};    // tangential part of f
   double q[3] = {};     // torque on i
+  double qj[3] = {};    // torque on j
 };
 
 template <class Normal, class Tangential = NoTangential, class Rolling = NoRolling>
@@ -41,15 +42,19 @@ struct ContactModel {
     for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
     if constexpr (Tangential::active) {
       tangential.force(s, out.fn, dt, h + tangential_offset, out.ft);
-      double arm[3], q[3];
-      for (int d = 0; d < 3; ++d) {
-        out.f[d] += out.ft[d];
-        arm[d] = -(s.ai - 0.5 * s.delta) * s.n[d];  // contact point (mid-overlap) from i's centre
-      }
-      cross3(arm, out.ft, q);
-      for (int d = 0; d < 3; ++d) out.q[d] = q[d];
+      for (int d = 0; d < 3; ++d) out.f[d] += out.ft[d];
+      // The contact point sits mid-overlap: lever arm -(a_i - delta/2) n from i (force ft)
+      // and +(a_j - delta/2) n from j (force -ft); the torques then balance exactly.
+      double nxf[3];
+      cross3(s.n, out.ft, nxf);
+      const double li = s.ai - 0.5 * s.delta, lj = s.aj - 0.5 * s.delta;
+      for (int d = 0; d < 3; ++d) out.q[d] = -li * nxf[d], out.qj[d] = -lj * nxf[d];
     }
-    if constexpr (Rolling::active) rolling.torque(s, out.fn, dt, h + rolling_offset, out.q);
+    if constexpr (Rolling::active) {
+      double qr[3] = {0, 0, 0};
+      rolling.torque(s, out.fn, dt, h + rolling_offset, qr);
+      for (int d = 0; d < 3; ++d) out.q[d] += qr[d], out.qj[d] -= qr[d];
+    }
   }
 
   // Static (elastic) forces of the current state, history untouched: for stress and energy.

@@ -86,6 +86,9 @@ class DemSystem {
   void rebuild() {
     nl_.build(p_, box_);
     history_.remap(p_, nl_);
+    constexpr int nb = Model::rotations ? 9 : 3;
+    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
+      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
   }
 
   Measurements measure() const {
@@ -145,7 +148,7 @@ class DemSystem {
     return nl_.needs_rebuild(max_sq, box_);
   }
   void forces(double dt) {
-    compute_forces(p_, nl_, history_view(), box_, model_, params_.damping, rate_, dt);
+    compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt);
   }
 
   void step_profiled(long n) {
@@ -211,6 +214,8 @@ class DemSystem {
   ContactHistory<ExecSpace, Model::history> history_;
   typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history", 1, 1};
   StepProfile* profile_ = nullptr;
+  using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
+  pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both
 };
 
 }  // namespace granular

@@ -37,13 +37,12 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   // Columns: ekin, epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers,
   // normal-force stress (6), tangential-force stress (6), rotational kinetic energy.
   constexpr int NC = 24;
-  constexpr int H = Model::history;
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
   const ParticleViews<ExecSpace> pv(p);
   auto v = p.v, w = p.w;
   auto mass = p.mass, inertia = p.inertia;
-  auto offsets = nl.offsets(), neighbors = nl.neighbors();
+  auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
   const PeriodicBox b = box;
   const Model m = model;
   const int thr = rattler_threshold;
@@ -51,16 +50,22 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   Kokkos::parallel_reduce(
       "dem::measure::per_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i, double& mo) {
+        constexpr int H = Model::history;  // declared here: nvcc must not capture it
+        (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
         double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0};
         double epot = 0.0;
         int c = 0;
         const double zero[3] = {0, 0, 0};
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
+          // Evaluated from the owner's side (lower index), where the history lives; stress
+          // and energy of a pair are the same seen from either side.
+          const int j = neighbors(k);
+          const int a = j > i ? i : j, c2 = j > i ? j : i, slot = j > i ? k : mirror(k);
           PairState s;
-          if (!pair_state(pv, b, zero, Model::rotations, i, neighbors(k), s)) continue;
+          if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
           double h[H > 0 ? H : 1];
           if constexpr (H > 0)
-            for (int q = 0; q < H; ++q) h[q] = history(k, q);
+            for (int q = 0; q < H; ++q) h[q] = history(slot, q);
           PairForce e;
           m.elastic(s, h, e);
           // sigma = (1/V) sum_c l (x) f with branch vector l = r n; each pair is seen twice.

@@ -79,6 +79,9 @@ class NeighborList {
   long builds() const { return builds_; }
   const int_view& offsets() const { return offsets_; }      // n + 1
   const int_view& neighbors() const { return neighbors_; }  // offsets(n)
+  // For entry k = (i, j): the entry (j, i). Lets the pair owner (i < j) compute a contact
+  // once and both particles gather it in a fixed order.
+  const int_view& mirror() const { return mirror_; }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.
   void build(const Particles<ExecSpace>& p, const PeriodicBox& box);
@@ -100,7 +103,7 @@ class NeighborList {
   long builds_ = 0;
   double a_max_ = 0.0;
   double built_len_[3] = {1, 1, 1};
-  int_view offsets_, neighbors_;
+  int_view offsets_, neighbors_, mirror_;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
   typename Particles<ExecSpace>::vec_view x_ref_;
 };
@@ -214,14 +217,31 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
       },
       total);
   num_entries_ = total;
-  if (static_cast<int>(neighbors_.extent(0)) < total)
+  if (static_cast<int>(neighbors_.extent(0)) < total) {
     neighbors_ = int_view("neighbor::neighbors", total + total / 8 + 16);
+    mirror_ = int_view("neighbor::mirror", total + total / 8 + 16);
+  }
   auto neighbors = neighbors_;
+  auto mirror = mirror_;
   Kokkos::parallel_for(
       "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
         int k = offsets(i);
         visit(i, [&](int j) { neighbors(k++) = j; });
+      });
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::mirror", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        for (int k = offsets(i); k < offsets(i + 1); ++k) {
+          const int j = neighbors(k);
+          int m = -1;
+          for (int q = offsets(j); q < offsets(j + 1); ++q)
+            if (neighbors(q) == i) {
+              m = q;
+              break;
+            }
+          mirror(k) = m;  // the list is symmetric by construction, so m is always found
+        }
       });
 
   Kokkos::deep_copy(x_ref_, x);
