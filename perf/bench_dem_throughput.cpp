@@ -31,7 +31,6 @@
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;
-using System = DemSystem<Exec, FrictionlessLinear>;
 
 namespace {
 
@@ -39,8 +38,6 @@ namespace {
 // absolute, k_t 8e4, gamma_t 500, mu 0.5 when frictional), no background damping,
 // dt = 0.0045 us (t_c/50 of the smallest pair), skin 0.2 mm. Units mm, us, ug.
 // These are the peer decks' parameters in SI: 1e8 N/m, 1 kg/s, 8e7 N/m, 0.5 kg/s.
-const FrictionlessLinear kModel = frictionless_linear(1e5, 1000);
-
 ContactConfig physics_config(const std::string& name) {
   ContactConfig c;
   c.linear = {1e5, 1000};
@@ -75,7 +72,8 @@ DemParams bench_params() {
   return p;
 }
 
-// A dense packing: random gas at phi 0.3, fast damped compression to 0.64, short
+// A dense packing: random gas at phi 0.3, fast damped compression to 0.64 with a little
+// friction (mu = 0.1, which jams the packing there, as in the peer's generator), short
 // relaxation; cached as HDF5 so later runs (other thread counts) time the same state.
 HostParticles dense_packing(int n, PeriodicBox& box, const std::string& cache_dir) {
   const std::string path = cache_dir + "/packing_" + std::to_string(n) + ".h5";
@@ -91,7 +89,10 @@ HostParticles dense_packing(int n, PeriodicBox& box, const std::string& cache_di
   DemParams prm = bench_params();
   prm.dt = 0.004;
   prm.damping.translational = 100;
-  System sys(Particles<Exec>::from_host(gas), box, kModel, prm);
+  prm.damping.rotational = 20;
+  using Prep = ContactModel<LinearNormal, CoulombTangential>;
+  const Prep prep{LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 500, 0.1, 0.1), {}};
+  DemSystem<Exec, Prep> sys(Particles<Exec>::from_host(gas), box, prep, prm);
   const double rate = -2e-2 / 3;  // volumetric 2e-2 per us
   const long steps = static_cast<long>(std::log(0.64 / 0.3) / (-3 * std::log1p(rate * prm.dt)));
   sys.set_strain_rate(rate, rate, rate);
