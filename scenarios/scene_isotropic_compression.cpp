@@ -74,6 +74,9 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   params.max_overlap = scene.real("run.max_overlap", 0.3);
   const long sample_every = scene.integer("run.sample_every", 500);
   const long checkpoint_every = scene.integer("run.checkpoint_every", 100000);
+  // Stop as if interrupted after this many steps (0: never), leaving the checkpoint behind;
+  // used to test that --resume reproduces an uninterrupted run.
+  const long stop_after = scene.integer("run.stop_after", 0);
   scene.require(gas.count >= 2, "particles.count", "must be at least 2");
   scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
                 "must lie between compression.phi_start and 1");
@@ -118,7 +121,17 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       static_cast<long>(std::ceil(std::log(phi_end / phi_start) / -std::log(shrink_per_step)));
   const long total_steps = compress_steps + relax_steps;
 
+  // A checkpoint is also a restart point of the uninterrupted run (fresh neighbour list,
+  // forces from the stored velocities), so a resumed run repeats it bit for bit.
+  // The strain rate of the step about to be taken (compression, then relaxation).
+  auto set_phase_rate = [&]() {
+    const double r = sys.steps() < compress_steps ? axis_rate : 0.0;
+    sys.set_strain_rate(r, r, r);
+  };
   auto save_checkpoint = [&]() {
+    set_phase_rate();
+    sys.rebuild();
+    sys.refresh_forces();
     H5Writer out(checkpoint);
     write_state(out, "/state", sys.particles(), sys.box(), gas.density);
     out.attribute("/state", "time", sys.time());
@@ -133,6 +146,10 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     write_particle_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5", "/state", sys.particles().n);
   };
 
+  if (opts.resume) {  // forces as the uninterrupted run had them at its checkpoint
+    set_phase_rate();
+    sys.refresh_forces();
+  }
   try {
     if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
     Progress progress("isotropic compression", total_steps - step0, opts.progress);
@@ -140,9 +157,9 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       const bool compressing = sys.steps() < compress_steps;
       const long phase_end = compressing ? compress_steps : total_steps;
       const long next_sample = (sys.steps() / sample_every + 1) * sample_every;
-      const long n = std::min(phase_end, next_sample) - sys.steps();
-      sys.set_strain_rate(compressing ? axis_rate : 0, compressing ? axis_rate : 0,
-                          compressing ? axis_rate : 0);
+      const long next_checkpoint = (sys.steps() / checkpoint_every + 1) * checkpoint_every;
+      const long n = std::min({phase_end, next_sample, next_checkpoint}) - sys.steps();
+      set_phase_rate();
       sys.step(n);
       const Measurements m = sys.measure();
       sys.check_health(m);
@@ -152,6 +169,10 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
                     m.z_corrected);
       progress.update(sys.steps() - step0, extra);
       if (sys.steps() / checkpoint_every != (sys.steps() - n) / checkpoint_every) save_checkpoint();
+      if (stop_after > 0 && sys.steps() >= stop_after) {
+        std::cerr << "stopped after step " << sys.steps() << " (run.stop_after); continue with --resume\n";
+        return;
+      }
     }
   } catch (const PhysicsError&) {
     write_failure_snapshot();
@@ -205,7 +226,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
-  run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
+  if (opts.charts) run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

@@ -17,6 +17,7 @@ struct CollisionSetup {
   double speed = 1.0;  // sphere 1 moves at +speed towards sphere 2 at rest
   double tangential_speed = 0.0;  // and at this speed along y (oblique impact)
   double spin = 0.0;              // angular velocity of sphere 1 about z
+  int species1 = 0, species2 = 0;
   double dt = 1e-3;
   bool record = false;  // keep the overlap/force/energy series
 };
@@ -52,6 +53,7 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   h.vy = {s.tangential_speed, 0.0};
   h.radius = {s.radius1, s.radius2};
   h.density = {s.density, s.density};
+  h.species = {s.species1, s.species2};
 
   DemParams params;
   params.dt = s.dt;
