@@ -6,7 +6,9 @@
 
 #include "core/error.hpp"
 #include "core/scene_file.hpp"
+#include "core/output.hpp"
 #include "granular_config.hpp"
+#include "scenarios/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace {
@@ -53,6 +55,14 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("scenes", "list the scene drivers");
 
+  auto* theory = app.add_subcommand("theory", "EMT and fluctuation-theory moduli (JSON)");
+  granular::TheoryInput tin;
+  theory->add_option("--phi", tin.phi, "volume fraction")->required()->check(CLI::Range(0.0, 1.0));
+  theory->add_option("--z", tin.z, "corrected coordination number")->required()->check(CLI::PositiveNumber);
+  theory->add_option("--chi", tin.chi, "contact-number fluctuation (default: closure 1/(phi Z))");
+  theory->add_option("--kt-kn", tin.kt_kn, "tangential over normal stiffness (default 0)");
+  theory->add_option("--D", tin.D, "size moment <d^2>/<d^3> x dbar (default 1.15)");
+
   CLI11_PARSE(app, argc, argv);
   if (show_version) {
     std::cout << version_line() << "\n";
@@ -60,6 +70,18 @@ int main(int argc, char** argv) {
   }
   if (list->parsed()) {
     for (const auto& e : granular::scene_registry()) std::cout << e.name << "\t" << e.description << "\n";
+    return 0;
+  }
+  if (theory->parsed()) {
+    const auto r = granular::moduli_theory(tin);
+    granular::Json j = granular::Json::object();
+    j["phi"] = tin.phi, j["z"] = tin.z, j["chi"] = r.chi, j["chi_from_closure"] = tin.chi < 0;
+    j["kt_kn"] = tin.kt_kn, j["D"] = tin.D;
+    j["rho"] = r.rho, j["zeta"] = r.zeta, j["rho_star"] = r.rho_s, j["zeta_star"] = r.zeta_s;
+    j["K_emt"] = r.K_emt, j["G_emt"] = r.G_emt;
+    j["K_ft_first_ring"] = r.K_ft1, j["G_ft_first_ring"] = r.G_ft1;
+    j["K_ft_second_ring"] = r.K_ft2, j["G_ft_second_ring"] = r.G_ft2;
+    std::cout << j.dump();
     return 0;
   }
   if (!run->parsed()) {
