@@ -16,6 +16,9 @@ namespace granular {
 struct Measurements {
   double ekin = 0;        // translational + rotational kinetic energy
   double ekin_rot = 0;    // its rotational part
+  double chi = 0;         // contact-number fluctuation <(Z - Zbar)^2>/Zbar^2 over non-rattlers
+  double contact_histogram[7] = {};  // fraction of particles with 0, 1, ..., 5, >= 6 contacts
+  double fabric[6] = {};  // (1/V) sum_p V_p sum_c n n  (xx yy zz xy xz yz)
   double epot = 0;        // elastic energy stored in contacts
   double stress[6] = {};  // xx yy zz xy xz yz; static (contact) part, positive in compression
   double stress_normal[6] = {};      // the same sum with normal contact forces only
@@ -35,8 +38,9 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
                      const HistoryView& history, const PeriodicBox& box, const Model& model,
                      int rattler_threshold, double particle_volume) {
   // Columns: ekin, epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers,
-  // normal-force stress (6), tangential-force stress (6), rotational kinetic energy.
-  constexpr int NC = 24;
+  // normal-force stress (6), tangential-force stress (6), rotational kinetic energy,
+  // squared contacts of non-rattlers, contact-number histogram (7), fabric (6).
+  constexpr int NC = 38;
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
   const ParticleViews<ExecSpace> pv(p);
@@ -52,7 +56,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
       KOKKOS_LAMBDA(const int i, double& mo) {
         constexpr int H = Model::history;  // declared here: nvcc must not capture it
         (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
-        double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0};
+        double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0}, fab[6] = {0, 0, 0, 0, 0, 0};
         double epot = 0.0;
         int c = 0;
         const double zero[3] = {0, 0, 0};
@@ -76,6 +80,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
           for (int q = 0; q < 6; ++q) {
             sn[q] += l[ia[q]] * fnv[ib[q]];
             st[q] += l[ia[q]] * e.ft[ib[q]];
+            fab[q] += s.n[ia[q]] * s.n[ib[q]];
           }
           epot += 0.5 * m.energy(s, h);
           ++c;
@@ -86,6 +91,11 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
         const double w2 = w(i, 0) * w(i, 0) + w(i, 1) * w(i, 1) + w(i, 2) * w(i, 2);
         per(i, 0) = 0.5 * mass(i) * v2 + 0.5 * inertia(i) * w2;
         per(i, 23) = 0.5 * inertia(i) * w2;
+        per(i, 24) = c >= thr ? static_cast<double>(c) * c : 0.0;
+        for (int q = 0; q < 7; ++q) per(i, 25 + q) = (c < 6 ? c == q : q == 6) ? 1.0 : 0.0;
+        const double ai = pv.radius(i);
+        const double vp = 4.0 / 3.0 * M_PI * ai * ai * ai;
+        for (int q = 0; q < 6; ++q) per(i, 32 + q) = vp * fab[q];
         per(i, 1) = epot;
         for (int q = 0; q < 6; ++q) {
           per(i, 2 + q) = sn[q] + st[q];
@@ -102,6 +112,12 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   out.volume = box.volume();
   out.ekin = sums[0];
   out.ekin_rot = sums[23];
+  if (sums[9] > 0 && out.z_corrected > 0) {
+    const double mean_sq = sums[24] / sums[9];
+    out.chi = (mean_sq - out.z_corrected * out.z_corrected) / (out.z_corrected * out.z_corrected);
+  }
+  for (int q = 0; q < 7; ++q) out.contact_histogram[q] = p.n > 0 ? sums[25 + q] / p.n : 0.0;
+  for (int q = 0; q < 6; ++q) out.fabric[q] = sums[32 + q] / box.volume();
   out.epot = sums[1];
   for (int q = 0; q < 6; ++q) {
     out.stress[q] = sums[2 + q] / out.volume;
