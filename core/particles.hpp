@@ -3,6 +3,7 @@
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.hpp"
@@ -36,6 +37,32 @@ struct Particles {
     inertia = scalar_view("particles::inertia", n);
     species = int_view("particles::species", n);
     id = int_view("particles::id", n);
+  }
+
+  // Reorders every per-particle field: new particle i is old particle order(i).
+  void permute(const int_view& order) {
+    auto gather_vec = [&](vec_view& a) {
+      vec_view b(a.label(), n);
+      auto src = a;
+      Kokkos::parallel_for(
+          "particles::Particles::permute", Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i) {
+            const int o = order(i);
+            b(i, 0) = src(o, 0), b(i, 1) = src(o, 1), b(i, 2) = src(o, 2);
+          });
+      a = b;
+    };
+    auto gather_scalar = [&](auto& a) {
+      using V = std::decay_t<decltype(a)>;
+      V b(a.label(), n);
+      auto src = a;
+      Kokkos::parallel_for(
+          "particles::Particles::permute", Kokkos::RangePolicy<ExecSpace>(0, n),
+          KOKKOS_LAMBDA(const int i) { b(i) = src(order(i)); });
+      a = b;
+    };
+    for (vec_view* a : {&x, &v, &w, &f, &torque}) gather_vec(*a);
+    gather_scalar(radius), gather_scalar(mass), gather_scalar(inertia);
+    gather_scalar(species), gather_scalar(id);
   }
 
   static Particles from_host(const HostParticles& h) {

@@ -95,12 +95,13 @@ struct ParticleViews {
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double* [3], mem> x, v, w;
   Kokkos::View<double*, mem> radius;
-  Kokkos::View<int*, mem> species;
+  Kokkos::View<int*, mem> species, id;
   explicit ParticleViews(const Particles<ExecSpace>& p)
-      : x(p.x), v(p.v), w(p.w), radius(p.radius), species(p.species) {}
+      : x(p.x), v(p.v), w(p.w), radius(p.radius), species(p.species), id(p.id) {}
 };
 
-// Two passes. Pairs: the owner of each contact (entry (i, j) with i < j) evaluates it once,
+// Two passes. Pairs: the owner of each contact (the particle with the lower identity, which
+// survives reordering) evaluates it once,
 // advances its history and stores the force on i and the torques on i and j. Gather: every
 // particle sums the contacts of its list in list order (owner entries directly, the others
 // through the mirror entry, with the sign of the force flipped). No atomics, half the pair
@@ -128,9 +129,10 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
         const double r3[3] = {rate[0], rate[1], rate[2]};
         const Body bi = load_body(pv, i, rot);
+        const int id_i = pv.id(i);
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
           const int j = neighbors(k);
-          if (j < i) continue;  // the other particle owns this contact
+          if (pv.id(j) < id_i) continue;  // the other particle owns this contact
           double rx, ry, rz, r2;
           if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
             // Not touching: no force, and the contact's history is forgotten. Most such
@@ -167,8 +169,9 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         double qi[3] = {0, 0, 0};
         if constexpr (rot)
           for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+        const int id_i = pv.id(i);
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          if (neighbors(k) > i) {
+          if (pv.id(neighbors(k)) > id_i) {
             for (int d = 0; d < 3; ++d) fi[d] += pair(k, d);
             if constexpr (rot)
               for (int d = 0; d < 3; ++d) qi[d] += pair(k, 3 + d);

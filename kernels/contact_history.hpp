@@ -21,8 +21,10 @@ class ContactHistory {
   const values_view& values() const { return values_; }
 
   // Carries history over from the list as it was (old_offsets/old_partner_ids) to the
-  // list as it is now. Call right after every rebuild.
-  void remap(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl) {
+  // list as it is now. Call right after every rebuild. `old_index(i)` is the index particle
+  // i had before the particles were reordered (empty view: no reordering).
+  void remap(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+             const int_view& old_index = int_view()) {
     if constexpr (H == 0) {
       return;
     } else {
@@ -34,6 +36,7 @@ class ContactHistory {
       auto old_values = values_;
       auto old_offsets = offsets_, old_ids = partner_ids_;
       const bool have_old = old_offsets.extent(0) == static_cast<size_t>(p.n + 1);
+      const bool reordered = old_index.extent(0) == static_cast<size_t>(p.n);
       Kokkos::parallel_for(
           "contact_history::ContactHistory::remap", Kokkos::RangePolicy<ExecSpace>(0, p.n),
           KOKKOS_LAMBDA(const int i) {
@@ -41,8 +44,9 @@ class ContactHistory {
               const int pid = id(neighbors(k));
               fresh_ids(k) = pid;
               int found = -1;
+              const int oi = reordered ? old_index(i) : i;
               if (have_old)
-                for (int o = old_offsets(i); o < old_offsets(i + 1); ++o)
+                for (int o = old_offsets(oi); o < old_offsets(oi + 1); ++o)
                   if (old_ids(o) == pid) {
                     found = o;
                     break;

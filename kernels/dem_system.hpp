@@ -28,6 +28,7 @@ struct DemParams {
   int rattler_threshold = 3;
   double max_overlap = 0.3;  // delta / min(a_i, a_j) above which the run is stopped
   double dt_guard = 0.1;     // dt must not exceed this fraction of the shortest collision
+  bool sort = true;          // reorder particles in cell order at every rebuild (locality)
   long rebuild_every = 0;    // > 0: rebuild the neighbour list every this many steps, whatever
                              // the skin criterion says (tests, benchmarks of flowing systems)
 };
@@ -83,9 +84,18 @@ class DemSystem {
   // Forces depend on velocities (damping): recompute after external edits of the state.
   void refresh_forces() { forces(0.0); }
   // Neighbour list from scratch, contact history carried over by partner identity.
+  // With sorting, particles are first put in cell order, so that neighbours sit close in
+  // memory; every per-particle array is permuted and the history follows by identity.
   void rebuild() {
+    typename Particles<ExecSpace>::int_view order;
+    if (params_.sort) {
+      nl_.bin(p_, box_);
+      order = typename Particles<ExecSpace>::int_view("dem::sort_order", p_.n);
+      Kokkos::deep_copy(order, Kokkos::subview(nl_.cell_order(), std::make_pair(0, p_.n)));
+      p_.permute(order);
+    }
     nl_.build(p_, box_);
-    history_.remap(p_, nl_);
+    history_.remap(p_, nl_, order);
     constexpr int nb = Model::rotations ? 9 : 3;
     if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
       pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);

@@ -61,10 +61,11 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
         int c = 0;
         const double zero[3] = {0, 0, 0};
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          // Evaluated from the owner's side (lower index), where the history lives; stress
-          // and energy of a pair are the same seen from either side.
+          // Evaluated from the owner's side (lower identity), where the history lives;
+          // stress and energy of a pair are the same seen from either side.
           const int j = neighbors(k);
-          const int a = j > i ? i : j, c2 = j > i ? j : i, slot = j > i ? k : mirror(k);
+          const bool own = pv.id(j) > pv.id(i);
+          const int a = own ? i : j, c2 = own ? j : i, slot = own ? k : mirror(k);
           PairState s;
           if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
           double h[H > 0 ? H : 1];

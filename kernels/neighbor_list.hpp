@@ -82,9 +82,14 @@ class NeighborList {
   // For entry k = (i, j): the entry (j, i). Lets the pair owner (i < j) compute a contact
   // once and both particles gather it in a fixed order.
   const int_view& mirror() const { return mirror_; }
+  // Particles in cell order (cells in z, y, x order; index order inside a cell): a
+  // space-filling order that keeps neighbours close in memory.
+  const int_view& cell_order() const { return cell_particles_; }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.
   void build(const Particles<ExecSpace>& p, const PeriodicBox& box);
+  // Only the binning step of build: fills cell_order().
+  void bin(const Particles<ExecSpace>& p, const PeriodicBox& box);
 
   // True when the list may miss a pair: 2 * max displacement since the build, plus the
   // affine shrinkage of the cutoff sphere, exceeds the skin.
@@ -105,11 +110,12 @@ class NeighborList {
   double built_len_[3] = {1, 1, 1};
   int_view offsets_, neighbors_, mirror_;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
+  int nc_[3] = {1, 1, 1};
   typename Particles<ExecSpace>::vec_view x_ref_;
 };
 
 template <class ExecSpace>
-void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const PeriodicBox& box) {
+void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicBox& box) {
   const int n = p.n;
   auto radius = p.radius;
   auto x = p.x;
@@ -179,15 +185,19 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
         const int slot = Kokkos::atomic_fetch_add(&cell_count(c), 1);
         cell_particles(cell_start(c) + slot) = i;
       });
-  // The atomic fill order depends on thread timing; sorting each cell restores a fixed order.
+  // The atomic fill order depends on thread timing; sorting each cell by particle identity
+  // restores a fixed order that depends only on positions and identities (not on the
+  // order particles happen to have in memory, so a restart reproduces it).
+  auto id = p.id;
   Kokkos::parallel_for(
       "neighbor::NeighborList::sort_cells", Kokkos::RangePolicy<ExecSpace>(0, ncells),
       KOKKOS_LAMBDA(const int c) {
         const int s = cell_start(c), e = cell_start(c + 1);
         for (int a = s + 1; a < e; ++a) {
           const int v = cell_particles(a);
+          const int idv = id(v);
           int k = a - 1;
-          while (k >= s && cell_particles(k) > v) {
+          while (k >= s && id(cell_particles(k)) > idv) {
             cell_particles(k + 1) = cell_particles(k);
             --k;
           }
@@ -195,8 +205,19 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
         }
       });
 
+  for (int d = 0; d < 3; ++d) nc_[d] = nc[d];
+}
+
+template <class ExecSpace>
+void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const PeriodicBox& box) {
+  bin(p, box);
+  const int n = p.n;
+  auto x = p.x;
+  auto radius = p.radius;
+  const PeriodicBox b = box;
+  auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
   const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles, b,
-                                     skin_, ncx, ncy, ncz};
+                                     skin_, nc_[0], nc_[1], nc_[2]};
 
   // count -> scan -> fill: exact capacity, no overflow to detect.
   auto offsets = offsets_;

@@ -20,12 +20,14 @@ void write_state(H5Writer& out, const std::string& group, const Particles<ExecSp
   auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
   auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
   auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
+  // Rows in identity order, whatever order the engine keeps in memory for locality.
   std::vector<double> pos(3 * n), vel(3 * n), rad(n);
   std::vector<int> ids(n);
   for (int i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) pos[3 * i + d] = x(i, d), vel[3 * i + d] = v(i, d);
-    rad[i] = r(i);
-    ids[i] = id(i);
+    const int row = id(i);
+    for (int d = 0; d < 3; ++d) pos[3 * row + d] = x(i, d), vel[3 * row + d] = v(i, d);
+    rad[row] = r(i);
+    ids[row] = row;
   }
   const hsize_t nn = static_cast<hsize_t>(n);
   out.write(group + "/position", pos, {nn, 3});

@@ -59,6 +59,7 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   params.dt = s.dt;
   params.skin = 0.1 * sum;
   params.max_overlap = 1.0;
+  params.sort = false;  // the harness addresses the spheres as particles 0 and 1
   DemSystem<ExecSpace, Model> sys(Particles<ExecSpace>::from_host(h), box, model, params);
   if (s.spin != 0.0) {
     auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().w);

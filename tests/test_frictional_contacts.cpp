@@ -108,10 +108,13 @@ std::vector<double> frictional_run(long rebuild_every, long& builds, double& tan
   builds = sys.neighbor_list().builds();
   const Measurements m = sys.measure();
   tangential_stress = std::fabs(m.stress_tangential[0]) + std::fabs(m.stress_tangential[3]);
+  // By particle identity: the two runs keep the particles in different memory orders.
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().x);
   auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().w);
-  std::vector<double> out(x.data(), x.data() + x.size());
-  out.insert(out.end(), w.data(), w.data() + w.size());
+  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().id);
+  std::vector<double> out(6 * x.extent(0));
+  for (size_t i = 0; i < x.extent(0); ++i)
+    for (int d = 0; d < 3; ++d) out[6 * id(i) + d] = x(i, d), out[6 * id(i) + 3 + d] = w(i, d);
   return out;
 }
 }  // namespace
