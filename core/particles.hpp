@@ -11,6 +11,24 @@
 
 namespace granular {
 
+// a <- a(order(i)) row by row, for rank-1 and (n x 3) views.
+template <class ExecSpace, class V, class Order>
+void gather_rows(V& a, const Order& order, int n) {
+  V b(a.label(), n);
+  auto src = a;
+  Kokkos::parallel_for(
+      "particles::gather_rows", Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i) {
+        const int o = order(i);
+        (void)b.extent(0), (void)src.extent(0);  // nvcc: capture outside the constexpr-if
+        if constexpr (V::rank == 2) {
+          for (int d = 0; d < 3; ++d) b(i, d) = src(o, d);
+        } else {
+          b(i) = src(o);
+        }
+      });
+  a = b;
+}
+
 template <class ExecSpace>
 struct Particles {
   using execution_space = ExecSpace;
@@ -41,28 +59,12 @@ struct Particles {
 
   // Reorders every per-particle field: new particle i is old particle order(i).
   void permute(const int_view& order) {
-    auto gather_vec = [&](vec_view& a) {
-      vec_view b(a.label(), n);
-      auto src = a;
-      Kokkos::parallel_for(
-          "particles::Particles::permute", Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i) {
-            const int o = order(i);
-            b(i, 0) = src(o, 0), b(i, 1) = src(o, 1), b(i, 2) = src(o, 2);
-          });
-      a = b;
-    };
-    auto gather_scalar = [&](auto& a) {
-      using V = std::decay_t<decltype(a)>;
-      V b(a.label(), n);
-      auto src = a;
-      Kokkos::parallel_for(
-          "particles::Particles::permute", Kokkos::RangePolicy<ExecSpace>(0, n),
-          KOKKOS_LAMBDA(const int i) { b(i) = src(order(i)); });
-      a = b;
-    };
-    for (vec_view* a : {&x, &v, &w, &f, &torque}) gather_vec(*a);
-    gather_scalar(radius), gather_scalar(mass), gather_scalar(inertia);
-    gather_scalar(species), gather_scalar(id);
+    for (vec_view* a : {&x, &v, &w, &f, &torque}) gather_rows<ExecSpace>(*a, order, n);
+    gather_rows<ExecSpace>(radius, order, n);
+    gather_rows<ExecSpace>(mass, order, n);
+    gather_rows<ExecSpace>(inertia, order, n);
+    gather_rows<ExecSpace>(species, order, n);
+    gather_rows<ExecSpace>(id, order, n);
   }
 
   static Particles from_host(const HostParticles& h) {
