@@ -18,6 +18,7 @@ struct CollisionSetup {
   double tangential_speed = 0.0;  // and at this speed along y (oblique impact)
   double spin = 0.0;              // angular velocity of sphere 1 about z
   int species1 = 0, species2 = 0;
+  double gamma_n = 0.0;  // normal viscosity of the model, for the dissipation bookkeeping
   double dt = 1e-3;
   bool record = false;  // keep the overlap/force/energy series
 };
@@ -34,6 +35,11 @@ struct CollisionResult {
   long steps = 0;
   std::vector<double> t, delta, force, energy;
   std::vector<double> force_normal, force_tangential;  // on sphere 2, split along the actual normal
+  // Energy bookkeeping (record mode): kinetic energy (translational + rotational) at the
+  // start and end, and the dissipation sums over the steps: normal dashpot gamma_n ddelta^2 dt
+  // and tangential -f_t . v_t dt (sliding friction plus tangential dashpot).
+  double ekin_before = 0, ekin_after = 0;
+  double dissipated_normal = 0, dissipated_tangential = 0;
 };
 
 template <class ExecSpace, class Model>
@@ -110,8 +116,40 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
       for (int d = 0; d < 3; ++d) L[d] += c[d] + ih(i) * wh(i, d);
     }
   };
+  // Dissipation of the contact over the last step, from the force on sphere 2 and the
+  // relative velocity of its contact point, both at the end of the step (the force was
+  // evaluated with the mid-step velocity; the difference is of the integrator's order).
+  auto ekin = [&]() {
+    double e = 0;
+    for (int i = 0; i < 2; ++i)
+      for (int d = 0; d < 3; ++d)
+        e += 0.5 * mh(i) * vh(i, d) * vh(i, d) + 0.5 * ih(i) * wh(i, d) * wh(i, d);
+    return e;
+  };
+  double v_mid[2][3] = {}, w_mid[2][3] = {};
+  auto dissipation = [&](double gamma_n) {
+    double n[3] = {xh(1, 0) - xh(0, 0), xh(1, 1) - xh(0, 1), xh(1, 2) - xh(0, 2)};
+    const double len = std::sqrt(dot3(n, n));
+    for (double& c : n) c /= len;
+    const double delta = sum - len;
+    if (delta <= 0) return;
+    const double l0 = s.radius1 - 0.5 * delta, l1 = s.radius2 - 0.5 * delta;
+    // Contact point of 2 relative to that of 1: v2 - l2 w2 x n - (v1 + l1 w1 x n).
+    double aw[3], c[3], vrel[3];
+    for (int d = 0; d < 3; ++d) aw[d] = l1 * w_mid[1][d] + l0 * w_mid[0][d];
+    cross3(aw, n, c);
+    for (int d = 0; d < 3; ++d) vrel[d] = v_mid[1][d] - v_mid[0][d] - c[d];
+    const double vn = dot3(vrel, n);
+    const double f[3] = {fh(1, 0), fh(1, 1), fh(1, 2)};
+    const double fn = dot3(f, n);
+    double ft_dot_vt = 0;
+    for (int d = 0; d < 3; ++d) ft_dot_vt += (f[d] - fn * n[d]) * (vrel[d] - vn * n[d]);
+    r.dissipated_normal += gamma_n * vn * vn * s.dt;
+    r.dissipated_tangential += -ft_dot_vt * s.dt;
+  };
   double delta, vrel, p, e0;
   kinematics(r.slip_before, r.vy_rel_before, r.angular_momentum_before);
+  r.ekin_before = ekin();
   sample(delta, vrel, p, e0);
   r.momentum_before = p;
   const double v_in = vrel;
@@ -122,8 +160,21 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
       static_cast<long>(100.0 * M_PI / std::sqrt(k * (1 / r.mass1 + 1 / r.mass2)) / s.dt) + 1000;
   double v_out = 0, e = e0;
   for (long k = 1; k <= max_steps; ++k) {
+    if (s.record) {  // velocities before the step, for the mid-step average below
+      Kokkos::deep_copy(vh, sys.particles().v);
+      Kokkos::deep_copy(wh, sys.particles().w);
+      for (int i = 0; i < 2; ++i)
+        for (int d = 0; d < 3; ++d) v_mid[i][d] = vh(i, d), w_mid[i][d] = wh(i, d);
+    }
     sys.step(1);
     sample(delta, vrel, p, e);
+    if (s.record) {
+      Kokkos::deep_copy(wh, sys.particles().w);
+      for (int i = 0; i < 2; ++i)
+        for (int d = 0; d < 3; ++d)
+          v_mid[i][d] = 0.5 * (v_mid[i][d] + vh(i, d)), w_mid[i][d] = 0.5 * (w_mid[i][d] + wh(i, d));
+      dissipation(s.gamma_n);
+    }
     const double t = k * s.dt;
     if (s.record) {
       r.t.push_back(t);
@@ -150,6 +201,7 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
     prev_delta = delta;
   }
   kinematics(r.slip_after, r.vy_rel_after, r.angular_momentum_after);
+  r.ekin_after = ekin();
   r.duration = t_end - t_start;
   r.restitution = -v_out / v_in;
   r.momentum_after = p;
