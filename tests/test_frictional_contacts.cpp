@@ -136,22 +136,27 @@ TYPED_TEST(FrictionTest, HistorySurvivesRebuildsEveryStepOrBySkinIdentically) {
   EXPECT_LT(worst, 1e-9);
 }
 
-TYPED_TEST(FrictionTest, DampedFrictionalCollisionLosesExactlyTheDissipatedWork) {
+TYPED_TEST(FrictionTest, DampedFrictionalCollisionLosesTheDissipatedWork) {
   // Oblique, spinning impact with normal and tangential dashpots and Coulomb sliding: the
   // kinetic energy (translational + rotational) lost equals the work of the normal dashpot
-  // plus that of the tangential force on the slip (friction + tangential dashpot).
-  const double gn = 500, mu = 0.3;
+  // plus that of the tangential force on the slip (friction + tangential dashpot), up to
+  // the bookkeeping's quadrature error, which is first order in dt (forces are sampled
+  // once per step): it must halve when dt halves.
+  const double gn = 200, mu = 0.3;
   const auto model = frictional(1e5, gn, 8e4, 100.0, mu);
   CollisionSetup s;
   s.radius1 = 1.0, s.radius2 = 0.8, s.density = 2000, s.speed = 0.01;
-  s.tangential_speed = 0.004, s.spin = -0.003, s.record = true, s.gamma_n = gn;
+  s.tangential_speed = 0.012, s.spin = -0.008, s.record = true, s.gamma_n = gn;
   const double m = mass(1.0) * mass(0.8) / (mass(1.0) + mass(0.8));
-  s.dt = model.normal.contact_duration(m) / 2000;
-  const auto r = collide_head_on<TypeParam>(model, s);
-  const double lost = r.ekin_before - r.ekin_after;
-  const double dissipated = r.dissipated_normal + r.dissipated_tangential;
-  EXPECT_GT(r.dissipated_normal, 0.1 * lost);      // both mechanisms matter here
-  EXPECT_GT(r.dissipated_tangential, 0.1 * lost);
-  EXPECT_NEAR(dissipated / lost, 1.0, 2e-3) << "lost " << lost << " normal " << r.dissipated_normal
-                                            << " tangential " << r.dissipated_tangential;
+  double mismatch[2];
+  for (int level = 0; level < 2; ++level) {
+    s.dt = model.normal.contact_duration(m) / (4000 << level);
+    const auto r = collide_head_on<TypeParam>(model, s);
+    const double lost = r.ekin_before - r.ekin_after;
+    EXPECT_GT(r.dissipated_normal, 0.2 * lost);  // both mechanisms matter here
+    EXPECT_GT(r.dissipated_tangential, 0.2 * lost);
+    mismatch[level] = (r.dissipated_normal + r.dissipated_tangential) / lost - 1;
+  }
+  EXPECT_LT(std::fabs(mismatch[1]), 1e-3);
+  EXPECT_NEAR(mismatch[0] / mismatch[1], 2.0, 0.2) << mismatch[0] << " " << mismatch[1];
 }
