@@ -1,0 +1,124 @@
+// Element-test building blocks on a DemSystem: straining the periodic box to a target
+// volume fraction, relaxing to static equilibrium, and elastic probing (small isotropic,
+// pure-shear and uniaxial strains) that turns stress increments into K, G and M.
+// Stresses are positive in compression; strains here are compressive true strains
+// eps = -ln(L / L0), so all three moduli come out positive.
+#pragma once
+#include <array>
+#include <cmath>
+#include <functional>
+
+#include "core/particles.hpp"
+#include "kernels/dem_system.hpp"
+
+namespace granular {
+
+// Host copy of the particle state (identity order), to start new systems from it.
+template <class ExecSpace>
+HostParticles snapshot(const Particles<ExecSpace>& p) {
+  auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
+  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
+  auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
+  auto m = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.mass);
+  auto s = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
+  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
+  HostParticles h;
+  h.resize(p.n);
+  for (int i = 0; i < p.n; ++i) {
+    const int k = id(i);
+    h.x[k] = x(i, 0), h.y[k] = x(i, 1), h.z[k] = x(i, 2);
+    h.vx[k] = v(i, 0), h.vy[k] = v(i, 1), h.vz[k] = v(i, 2);
+    h.radius[k] = r(i);
+    h.density[k] = m(i) / (4.0 / 3.0 * M_PI * r(i) * r(i) * r(i));
+    h.species[k] = s(i);
+  }
+  return h;
+}
+
+// Strains the box isotropically at `rate` (per axis, signed) until phi crosses `target`;
+// calls `sample` every `every` steps. Returns the steps taken.
+template <class System>
+long strain_to_phi(System& sys, double target, double rate, long every,
+                   const std::function<void(const Measurements&)>& sample) {
+  sys.set_strain_rate(rate, rate, rate);
+  long steps = 0;
+  const bool compress = rate < 0;
+  while (true) {
+    const double phi = sys.particle_volume() / sys.box().volume();
+    if (compress ? phi >= target : phi <= target) break;
+    // Steps left to the target at this rate, capped by the sampling interval.
+    const double left = std::log(phi / target) / (3.0 * std::log1p(rate * sys.params().dt));
+    const long n = std::max(1L, std::min(every, static_cast<long>(std::ceil(left))));
+    sys.step(n);
+    steps += n;
+    const Measurements m = sys.measure();
+    sys.check_health(m);
+    if (sample) sample(m);
+  }
+  sys.set_strain_rate(0, 0, 0);
+  return steps;
+}
+
+// Constant-volume relaxation until E_kin/E_pot < ratio (or max_steps). Returns the ratio.
+template <class System>
+double relax(System& sys, double ratio, long max_steps, long every = 500) {
+  sys.set_strain_rate(0, 0, 0);
+  double r = 1e300;
+  for (long done = 0; done < max_steps; done += every) {
+    sys.step(every);
+    const Measurements m = sys.measure();
+    sys.check_health(m);
+    r = m.epot > 0 ? m.ekin / m.epot : 0.0;
+    if (r < ratio) break;
+  }
+  return r;
+}
+
+struct Moduli {
+  double K = 0, G = 0, M = 0;        // bulk, shear, P-wave (uniaxial) moduli
+  double K_n = 0, K_t = 0, G_n = 0, G_t = 0;  // from normal / tangential contact forces
+};
+
+// Probes a relaxed state: three independent runs from the same snapshot, each straining by
+// `amplitude` (compressive true strain; pure shear compresses x and stretches y) in
+// `strain_steps` steps and relaxing `relax_steps` at fixed box. make_system(host, box)
+// builds the system to probe (typically with mu = infinity).
+template <class MakeSystem>
+Moduli probe_moduli(const HostParticles& state, const PeriodicBox& box, double amplitude,
+                    long strain_steps, long relax_steps, MakeSystem make_system) {
+  auto run = [&](std::array<double, 3> pattern, Measurements& before, Measurements& after,
+                 std::array<double, 3>& eps) {
+    auto sys = make_system(state, box);
+    before = sys.measure();
+    const double dt = sys.params().dt;
+    // Per-step factor so that strain_steps steps give exactly exp(-amplitude) per unit of pattern.
+    double rate[3];
+    for (int d = 0; d < 3; ++d) rate[d] = std::expm1(-amplitude * pattern[d] / strain_steps) / dt;
+    sys.set_strain_rate(rate[0], rate[1], rate[2]);
+    sys.step(strain_steps);
+    sys.set_strain_rate(0, 0, 0);
+    sys.step(relax_steps);
+    after = sys.measure();
+    for (int d = 0; d < 3; ++d) eps[d] = -std::log(sys.box().len[d] / box.len[d]);
+  };
+  Moduli out;
+  Measurements a, b;
+  std::array<double, 3> e;
+  auto p = [](const double* s) { return (s[0] + s[1] + s[2]) / 3.0; };
+  run({1, 1, 1}, a, b, e);
+  const double ev = e[0] + e[1] + e[2];
+  out.K = (b.pressure - a.pressure) / ev;
+  out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
+  out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
+  run({1, -1, 0}, a, b, e);
+  const double ed = 2 * (e[0] - e[1]);
+  out.G = ((b.stress[0] - b.stress[1]) - (a.stress[0] - a.stress[1])) / ed;
+  out.G_n = ((b.stress_normal[0] - b.stress_normal[1]) - (a.stress_normal[0] - a.stress_normal[1])) / ed;
+  out.G_t = ((b.stress_tangential[0] - b.stress_tangential[1]) -
+             (a.stress_tangential[0] - a.stress_tangential[1])) / ed;
+  run({1, 0, 0}, a, b, e);
+  out.M = (b.stress[0] - a.stress[0]) / e[0];
+  return out;
+}
+
+}  // namespace granular

@@ -1,0 +1,44 @@
+// Elastic probing against the exact moduli of a simple cubic lattice with nearest-neighbour
+// linear springs k at spacing a (no non-affine relaxation by symmetry). With a pre-stress
+// (initial overlap d0, force k d0) the static stress sigma = r f / V gives
+//   K = k/(3a) (1 + 2 d0/a),  G = (C11 - C12)/2 = k/(2a) (1 - d0/a),  M = C11 = k/a,
+// and M = K + 4G/3 holds exactly.
+#include <gtest/gtest.h>
+
+#include "exec_spaces.hpp"
+#include "kernels/contact_model.hpp"
+#include "scenarios/element_test.hpp"
+
+using namespace granular;
+
+template <class T>
+class ProbingTest : public ::testing::Test {};
+TYPED_TEST_SUITE(ProbingTest, granular::testing::ExecSpaces);
+
+TYPED_TEST(ProbingTest, SimpleCubicLatticeModuliMatchTheExactSpringNetwork) {
+  using Exec = TypeParam;
+  const int m = 6;
+  const double a = 1.0, k = 2.0e3;
+  HostParticles h;
+  h.resize(m * m * m);
+  for (int i = 0; i < m * m * m; ++i) {
+    h.x[i] = (i % m + 0.5) * a, h.y[i] = ((i / m) % m + 0.5) * a, h.z[i] = (i / (m * m) + 0.5) * a;
+    h.radius[i] = 0.502 * a, h.density[i] = 1.0;
+  }
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.len[d] = m * a;
+  DemParams prm;
+  prm.dt = 1e-3, prm.skin = 0.05, prm.damping.translational = 1.0;
+  auto make = [&](const HostParticles& s, const PeriodicBox& b) {
+    return DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(s), b,
+                                               frictionless_linear(k, 0.0), prm);
+  };
+  const Moduli mod = probe_moduli(h, box, 1e-6, 200, 50, make);
+  const double d0 = 2 * 0.502 * a - a;
+  EXPECT_NEAR(mod.K / (k / (3 * a) * (1 + 2 * d0 / a)), 1.0, 1e-5);
+  EXPECT_NEAR(mod.G / (k / (2 * a) * (1 - d0 / a)), 1.0, 1e-5);
+  EXPECT_NEAR(mod.M / (k / a), 1.0, 1e-5);
+  EXPECT_NEAR(mod.M / (mod.K + 4.0 / 3.0 * mod.G), 1.0, 1e-5);
+  EXPECT_NEAR(mod.K_n, mod.K, 1e-9 * mod.K);  // frictionless: all normal
+  EXPECT_EQ(mod.K_t, 0.0);
+}
