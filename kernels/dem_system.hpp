@@ -78,6 +78,9 @@ class DemSystem {
   // Same step, timed per phase (for benchmarks). Pass nullptr to switch off.
   void set_profile(StepProfile* profile) { profile_ = profile; }
 
+  // Same physics with other parameters (e.g. infinite friction for probing); history kept.
+  void set_model(const Model& model) { model_ = model; }
+
   void set_strain_rate(double ex, double ey, double ez) {
     rate_[0] = ex, rate_[1] = ey, rate_[2] = ez;
   }

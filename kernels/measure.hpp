@@ -113,10 +113,6 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   out.volume = box.volume();
   out.ekin = sums[0];
   out.ekin_rot = sums[23];
-  if (sums[9] > 0 && out.z_corrected > 0) {
-    const double mean_sq = sums[24] / sums[9];
-    out.chi = (mean_sq - out.z_corrected * out.z_corrected) / (out.z_corrected * out.z_corrected);
-  }
   for (int q = 0; q < 7; ++q) out.contact_histogram[q] = p.n > 0 ? sums[25 + q] / p.n : 0.0;
   for (int q = 0; q < 6; ++q) out.fabric[q] = sums[32 + q] / box.volume();
   out.epot = sums[1];
@@ -130,6 +126,10 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   out.z = p.n > 0 ? sums[8] / p.n : 0.0;
   out.rattlers = p.n - sums[9];
   out.z_corrected = sums[9] > 0 ? sums[10] / sums[9] : 0.0;
+  if (out.z_corrected > 0) {
+    const double mean_sq = sums[24] / sums[9];
+    out.chi = (mean_sq - out.z_corrected * out.z_corrected) / (out.z_corrected * out.z_corrected);
+  }
   out.phi = particle_volume / out.volume;
   out.max_overlap = max_overlap;
   return out;

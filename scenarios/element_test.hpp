@@ -8,32 +8,9 @@
 #include <cmath>
 #include <functional>
 
-#include "core/particles.hpp"
 #include "kernels/dem_system.hpp"
 
 namespace granular {
-
-// Host copy of the particle state (identity order), to start new systems from it.
-template <class ExecSpace>
-HostParticles snapshot(const Particles<ExecSpace>& p) {
-  auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
-  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
-  auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
-  auto m = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.mass);
-  auto s = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
-  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
-  HostParticles h;
-  h.resize(p.n);
-  for (int i = 0; i < p.n; ++i) {
-    const int k = id(i);
-    h.x[k] = x(i, 0), h.y[k] = x(i, 1), h.z[k] = x(i, 2);
-    h.vx[k] = v(i, 0), h.vy[k] = v(i, 1), h.vz[k] = v(i, 2);
-    h.radius[k] = r(i);
-    h.density[k] = m(i) / (4.0 / 3.0 * M_PI * r(i) * r(i) * r(i));
-    h.species[k] = s(i);
-  }
-  return h;
-}
 
 // Strains the box isotropically at `rate` (per axis, signed) until phi crosses `target`;
 // calls `sample` every `every` steps. Returns the steps taken.
@@ -79,27 +56,30 @@ struct Moduli {
   double K_n = 0, K_t = 0, G_n = 0, G_t = 0;  // from normal / tangential contact forces
 };
 
-// Probes a relaxed state: three independent runs from the same snapshot, each straining by
-// `amplitude` (compressive true strain; pure shear compresses x and stretches y) in
-// `strain_steps` steps and relaxing `relax_steps` at fixed box. make_system(host, box)
-// builds the system to probe (typically with mu = infinity).
-template <class MakeSystem>
-Moduli probe_moduli(const HostParticles& state, const PeriodicBox& box, double amplitude,
-                    long strain_steps, long relax_steps, MakeSystem make_system) {
-  auto run = [&](std::array<double, 3> pattern, Measurements& before, Measurements& after,
-                 std::array<double, 3>& eps) {
-    auto sys = make_system(state, box);
-    before = sys.measure();
-    const double dt = sys.params().dt;
-    // Per-step factor so that strain_steps steps give exactly exp(-amplitude) per unit of pattern.
+// Probes a relaxed system in place, keeping its contact history: for each mode (isotropic,
+// pure shear compressing x and stretching y, uniaxial along x) strain by `amplitude`
+// (compressive true strain) in `strain_steps` steps, relax `relax_steps` at fixed box,
+// measure, then reverse the strain the same way (the reversal test) and relax again.
+template <class System>
+Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax_steps,
+                    double* reversal_residual = nullptr) {
+  const double dt = sys.params().dt;
+  auto strain = [&](const std::array<double, 3>& pattern, double sign) {
     double rate[3];
-    for (int d = 0; d < 3; ++d) rate[d] = std::expm1(-amplitude * pattern[d] / strain_steps) / dt;
+    for (int d = 0; d < 3; ++d) rate[d] = std::expm1(-sign * amplitude * pattern[d] / strain_steps) / dt;
     sys.set_strain_rate(rate[0], rate[1], rate[2]);
     sys.step(strain_steps);
     sys.set_strain_rate(0, 0, 0);
     sys.step(relax_steps);
+  };
+  auto run = [&](const std::array<double, 3>& pattern, Measurements& before, Measurements& after,
+                 std::array<double, 3>& eps) {
+    const PeriodicBox box0 = sys.box();
+    before = sys.measure();
+    strain(pattern, +1);
     after = sys.measure();
-    for (int d = 0; d < 3; ++d) eps[d] = -std::log(sys.box().len[d] / box.len[d]);
+    for (int d = 0; d < 3; ++d) eps[d] = -std::log(sys.box().len[d] / box0.len[d]);
+    strain(pattern, -1);
   };
   Moduli out;
   Measurements a, b;
@@ -110,6 +90,7 @@ Moduli probe_moduli(const HostParticles& state, const PeriodicBox& box, double a
   out.K = (b.pressure - a.pressure) / ev;
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
+  if (reversal_residual) *reversal_residual = (sys.measure().pressure - a.pressure) / (b.pressure - a.pressure);
   run({1, -1, 0}, a, b, e);
   const double ed = 2 * (e[0] - e[1]);
   out.G = ((b.stress[0] - b.stress[1]) - (a.stress[0] - a.stress[1])) / ed;

@@ -29,6 +29,7 @@ const std::vector<SceneEntry>& scene_registry();
 void run_two_particle_linear(const SceneFile&, const RunOptions&);
 void run_isotropic_compression(const SceneFile&, const RunOptions&);
 void run_hysteretic_collision(const SceneFile&, const RunOptions&);
+void run_elastic_moduli(const SceneFile&, const RunOptions&);
 // chain scenes
 
 }  // namespace granular

@@ -186,3 +186,37 @@ TEST(Measurements, ChiHistogramAndFabricOfASimpleCubicLattice) {
   EXPECT_NEAR(r.stress[0], m * m * m * 1.0 * 0.01 / box.volume(), 1e-14);
   EXPECT_NEAR(r.stress[3], 0.0, 1e-14);
 }
+
+TEST(Measurements, CoordinationChiAndHistogramMatchBruteForceCountOfADensePacking) {
+  using Exec = Kokkos::DefaultExecutionSpace;
+  PeriodicBox box;
+  GasSpec g;
+  g.count = 400, g.diameter_min = 1.0, g.diameter_max = 3.0, g.density = 2000, g.phi = 0.4, g.seed = 7;
+  const HostParticles h = random_gas(g, box);
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.2, prm.damping.translational = 100;
+  // Compressed into a contact-rich state below.
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(1e5, 1000), prm);
+  sys.set_strain_rate(-2e-2, -2e-2, -2e-2);
+  sys.step(2500);
+  const Measurements m = sys.measure();
+  // Brute force: contacts per particle from all pairs and images.
+  auto touching = brute_force(sys.particles(), sys.box(), 0.0);
+  const int thr = prm.rattler_threshold;
+  double n_r = 0, sum_c = 0, sum_c2 = 0, hist6 = 0, total = 0;
+  for (const auto& t : touching) {
+    const double c = static_cast<double>(t.size());
+    total += c;
+    hist6 += c >= 6 ? 1 : 0;
+    if (c >= thr) n_r += 1, sum_c += c, sum_c2 += c * c;
+  }
+  ASSERT_GT(n_r, 100);
+  const double zbar = sum_c / n_r;
+  EXPECT_NEAR(m.z, total / 400, 1e-12);
+  EXPECT_NEAR(m.z_corrected, zbar, 1e-12);
+  EXPECT_NEAR(m.rattlers, 400 - n_r, 1e-12);
+  const double chi = (sum_c2 / n_r - zbar * zbar) / (zbar * zbar);
+  EXPECT_GT(chi, 0.01);  // a disordered packing: the check is not vacuous
+  EXPECT_NEAR(m.chi, chi, 1e-12);
+  EXPECT_NEAR(m.contact_histogram[6], hist6 / 400, 1e-12);
+}
