@@ -14,16 +14,20 @@ struct PeriodicBox {
   // holds for particles that are wrapped every step.
   KOKKOS_INLINE_FUNCTION double min_image(double dx, int d) const {
     const double l = len[d];
-    if (dx > 0.5 * l) dx -= l;
-    else if (dx < -0.5 * l) dx += l;
+    if (dx > 0.5 * l)
+      dx -= l;
+    else if (dx < -0.5 * l)
+      dx += l;
     return dx;
   }
 
   // Re-entry through the opposite face.
   KOKKOS_INLINE_FUNCTION double wrap(double x, int d) const {
     const double l = len[d];
-    if (x >= lo[d] + l) x -= l;
-    else if (x < lo[d]) x += l;
+    if (x >= lo[d] + l)
+      x -= l;
+    else if (x < lo[d])
+      x += l;
     return x;
   }
 };

@@ -65,7 +65,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     if (!(ss >> id)) fail("expected an atom id");
     while (ss >> x) v.push_back(x);
     if (section == "Atoms") {
-      if (v.size() < 6) fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
+      if (v.size() < 6)
+        fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
       atoms[id] = v;
     } else if (section == "Velocities") {
       if (v.size() < 3) fail("Velocities line needs: id vx vy vz [wx wy wz]");
@@ -87,7 +88,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     h.x[i] = a[3] * length_scale, h.y[i] = a[4] * length_scale, h.z[i] = a[5] * length_scale;
     auto it = vels.find(id);
     if (it != vels.end()) {
-      h.vx[i] = it->second[0] * vscale, h.vy[i] = it->second[1] * vscale, h.vz[i] = it->second[2] * vscale;
+      h.vx[i] = it->second[0] * vscale, h.vy[i] = it->second[1] * vscale,
+      h.vz[i] = it->second[2] * vscale;
     }
     ++i;
   }

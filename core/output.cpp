@@ -39,10 +39,18 @@ void quote(std::string& out, const std::string& s) {
   out += '"';
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -115,7 +123,8 @@ std::string partial_name(const std::string& path) {
 void commit_file(const std::string& partial, const std::string& path) {
   std::error_code ec;
   fs::rename(partial, path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + partial + " to " + path + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot rename " + partial + " to " + path + ": " + ec.message());
 }
 
 void make_directories(const std::string& dir) {
@@ -285,8 +294,8 @@ void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_nam
     const bool vec = std::string(name) == "velocity";
     x << "   <Attribute Name=\"" << name << "\" AttributeType=\"" << (vec ? "Vector" : "Scalar")
       << "\" Center=\"Node\">\n    <DataItem Dimensions=\"" << n << (vec ? " 3" : "")
-      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group
-      << "/" << name << "</DataItem>\n   </Attribute>\n";
+      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group << "/"
+      << name << "</DataItem>\n   </Attribute>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";
   write_text_file(xdmf_path, x.str());

@@ -26,17 +26,31 @@ class Json {
   Json(const char* s) : v_(std::string(s)) {}
   Json(std::string s) : v_(std::move(s)) {}
   Json(const std::vector<double>& a);
-  static Json object() { Json j; j.v_ = Object{}; return j; }
-  static Json array() { Json j; j.v_ = Array{}; return j; }
+  static Json object() {
+    Json j;
+    j.v_ = Object{};
+    return j;
+  }
+  static Json array() {
+    Json j;
+    j.v_ = Array{};
+    return j;
+  }
   // Raw JSON text (already valid), e.g. a value copied from a scene file.
-  static Json raw(std::string text) { Json j; j.v_ = Raw{std::move(text)}; return j; }
+  static Json raw(std::string text) {
+    Json j;
+    j.v_ = Raw{std::move(text)};
+    return j;
+  }
 
   Json& operator[](const std::string& key);  // object member, created on first use
   void push(Json value);                     // array element
   std::string dump(int indent = 2) const;
 
  private:
-  struct Raw { std::string text; };
+  struct Raw {
+    std::string text;
+  };
   void dump_to(std::string& out, int indent, int depth) const;
   std::variant<std::nullptr_t, double, bool, std::string, Object, Array, Raw> v_;
 };
@@ -59,8 +73,7 @@ class H5Writer {
   // Dataset "group/sub/name"; groups are created on demand. dims empty = 1-D of data.size().
   void write(const std::string& name, const std::vector<double>& data,
              std::vector<hsize_t> dims = {});
-  void write(const std::string& name, const std::vector<int>& data,
-             std::vector<hsize_t> dims = {});
+  void write(const std::string& name, const std::vector<int>& data, std::vector<hsize_t> dims = {});
   void attribute(const std::string& object, const std::string& name, double value);
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   void commit();  // close and rename into place

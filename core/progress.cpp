@@ -31,8 +31,8 @@ void Progress::update(long step, const std::string& extra) {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double eta = step > 0 ? elapsed * (total_ - step) / step : 0.0;
   std::fprintf(stderr, "%s[%s] step %ld/%ld (%3.0f%%) elapsed %.0fs ETA %.0fs %s%s",
-               tty_ ? "\r\033[K" : "", phase_.c_str(), step, total_, 100.0 * step / total_,
-               elapsed, eta, extra.c_str(), tty_ ? "" : "\n");
+               tty_ ? "\r\033[K" : "", phase_.c_str(), step, total_, 100.0 * step / total_, elapsed,
+               eta, extra.c_str(), tty_ ? "" : "\n");
   std::fflush(stderr);
 }
 

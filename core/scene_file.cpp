@@ -50,9 +50,7 @@ SceneFile SceneFile::parse(const std::string& text, const std::string& source_na
   return s;
 }
 
-const void* SceneFile::find(const std::string& key) const {
-  return doc_->root.at_path(key).node();
-}
+const void* SceneFile::find(const std::string& key) const { return doc_->root.at_path(key).node(); }
 
 void SceneFile::fail(const std::string& key, const std::string& what) const {
   throw InputError("scene file " + path_ + ": key '" + key + "' " + what);
@@ -62,9 +60,7 @@ void SceneFile::require(bool ok, const std::string& key, const std::string& what
   if (!ok) fail(key, what);
 }
 
-void SceneFile::note(const std::string& key, const std::string& value) const {
-  used_[key] = value;
-}
+void SceneFile::note(const std::string& key, const std::string& value) const { used_[key] = value; }
 
 bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
 
@@ -161,7 +157,8 @@ void SceneFile::reject_unknown_keys() const {
     auto [prefix, table] = stack.back();
     stack.pop_back();
     for (const auto& [k, node] : *table) {
-      const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+      const std::string key =
+          prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
       if (const toml::table* sub = node.as_table()) {
         stack.emplace_back(key, sub);
       } else if (!used_.count(key)) {

@@ -2,12 +2,11 @@
 // recorded; keys that nobody read are reported as unknown, naming the key and the file.
 #pragma once
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <memory>
 
 #include "core/error.hpp"
 

@@ -93,7 +93,7 @@ KOKKOS_INLINE_FUNCTION bool pair_state(const Views& v, const PeriodicBox& b, con
 template <class ExecSpace>
 struct ParticleViews {
   using mem = typename ExecSpace::memory_space;
-  Kokkos::View<double* [3], mem> x, v, w;
+  Kokkos::View<double*[3], mem> x, v, w;
   Kokkos::View<double*, mem> radius;
   Kokkos::View<int*, mem> species, id;
   explicit ParticleViews(const Particles<ExecSpace>& p)
@@ -122,7 +122,8 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
   // Compile-time switches are re-declared inside each kernel: nvcc would otherwise
   // capture them, which extended lambdas cannot do in an if-constexpr condition.
   Kokkos::parallel_for(
-      "dem::compute_forces::pairs", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+      "dem::compute_forces::pairs", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
         constexpr int H = Model::history;
         constexpr bool rot = Model::rotations;
         constexpr int NB = rot ? 9 : 3;
@@ -161,7 +162,8 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         }
       });
   Kokkos::parallel_for(
-      "dem::compute_forces::gather", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+      "dem::compute_forces::gather", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
         constexpr bool rot = Model::rotations;
         (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
         (void)gr;

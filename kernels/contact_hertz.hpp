@@ -14,8 +14,8 @@ namespace granular {
 struct HertzNormal {
   static constexpr int history = 0;
   struct Params {
-    double K = 0.0;          // elastic coefficient
-    double G = 0.0;          // viscous coefficient
+    double K = 0.0;               // elastic coefficient
+    double G = 0.0;               // viscous coefficient
     bool reduced_radius = false;  // L = R (modulus form) instead of dbar (stiffness form)
   };
   PairTable<Params> table;

@@ -48,8 +48,7 @@ struct HystereticNormal {
   double stiffness(double = 0, double = 0) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        k = std::max({k, table.p[a][b].k2, table.p[a][b].kc});
+      for (int b = 0; b < kMaxSpecies; ++b) k = std::max({k, table.p[a][b].k2, table.p[a][b].kc});
     return k;
   }
   double shortest_duration(double m, double = 0, double = 0) const {

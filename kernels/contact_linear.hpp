@@ -17,7 +17,9 @@ struct LinearNormal {
   };
   PairTable<Params> table;
 
-  static LinearNormal uniform(double kn, double gn) { return {PairTable<Params>::uniform({kn, gn})}; }
+  static LinearNormal uniform(double kn, double gn) {
+    return {PairTable<Params>::uniform({kn, gn})};
+  }
 
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
     const Params& q = table(s.si, s.sj);
@@ -36,7 +38,9 @@ struct LinearNormal {
     const double eta = q.gn / (2.0 * m);
     return std::sqrt(q.kn / m - eta * eta);
   }
-  double contact_duration(double m, int si = 0, int sj = 0) const { return M_PI / omega(m, si, sj); }
+  double contact_duration(double m, int si = 0, int sj = 0) const {
+    return M_PI / omega(m, si, sj);
+  }
   double restitution(double m, int si = 0, int sj = 0) const {
     return std::exp(-table.p[si][sj].gn / (2.0 * m) * contact_duration(m, si, sj));
   }
@@ -50,7 +54,7 @@ struct LinearNormal {
         if (!(q.kn > 0)) continue;
         const double eta = q.gn / (2.0 * m);
         t = std::min(t, q.kn / m > eta * eta ? M_PI / std::sqrt(q.kn / m - eta * eta)
-                                              : M_PI * std::sqrt(m / q.kn));
+                                             : M_PI * std::sqrt(m / q.kn));
       }
     return t;
   }

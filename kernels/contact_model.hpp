@@ -13,11 +13,11 @@
 namespace granular {
 
 struct PairForce {
-  double fn = 0;        // normal force (positive: repulsive)
-  double f[3] = {};     // total force on i
-  double ft[3] = {};    // tangential part of f
-  double q[3] = {};     // torque on i
-  double qj[3] = {};    // torque on j
+  double fn = 0;      // normal force (positive: repulsive)
+  double f[3] = {};   // total force on i
+  double ft[3] = {};  // tangential part of f
+  double q[3] = {};   // torque on i
+  double qj[3] = {};  // torque on j
 };
 
 template <class Normal, class Tangential = NoTangential, class Rolling = NoRolling>
@@ -37,7 +37,8 @@ struct ContactModel {
   Rolling rolling;
 
   // Full evaluation for one step of length dt: advances the history in h.
-  KOKKOS_INLINE_FUNCTION void evaluate(const PairState& s, double dt, double* h, PairForce& out) const {
+  KOKKOS_INLINE_FUNCTION void evaluate(const PairState& s, double dt, double* h,
+                                       PairForce& out) const {
     out.fn = normal.force(s, h + normal_offset);
     for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
     if constexpr (Tangential::active) {

@@ -54,8 +54,8 @@ KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
   if (len_sq == 0.0) return;
   const double sn = dot3(s, n);
   const double x = sn * sn / len_sq;
-  const double scale =
-      x < 1e-4 ? 1.0 + x * (0.5 + x * (0.375 + x * 0.3125)) : 1.0 / Kokkos::Experimental::sqrt(1.0 - x);
+  const double scale = x < 1e-4 ? 1.0 + x * (0.5 + x * (0.375 + x * 0.3125))
+                                : 1.0 / Kokkos::Experimental::sqrt(1.0 - x);
   for (int d = 0; d < 3; ++d) s[d] = (s[d] - sn * n[d]) * scale;
 }
 

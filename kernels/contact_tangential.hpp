@@ -27,7 +27,8 @@ struct CoulombTangential {
   };
   PairTable<Params> table;
 
-  static CoulombTangential uniform(double kt, double gt, double mu_s, double mu_d, int law = Constant) {
+  static CoulombTangential uniform(double kt, double gt, double mu_s, double mu_d,
+                                   int law = Constant) {
     return {PairTable<Params>::uniform({kt, gt, mu_s, mu_d, law})};
   }
 
@@ -71,8 +72,8 @@ struct CoulombTangential {
 };
 
 // Rolling and torsion resistance: spring-dashpot-Coulomb on the relative rolling velocity
-// v_r = a' (w_i - w_j) x n and torsion velocity v_o = a' ((w_i - w_j).n) n, a' = a_i a_j/(a_i + a_j).
-// Torques on i: a' n x f_r and a' f_o; both oppose the relative rotation.
+// v_r = a' (w_i - w_j) x n and torsion velocity v_o = a' ((w_i - w_j).n) n, a' = a_i a_j/(a_i +
+// a_j). Torques on i: a' n x f_r and a' f_o; both oppose the relative rotation.
 struct NoRolling {
   static constexpr int history = 0;
   static constexpr bool active = false;

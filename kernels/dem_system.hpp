@@ -110,8 +110,10 @@ class DemSystem {
   }
   // Per-contact history rows, aligned with the neighbour list (empty for models without).
   typename ContactHistory<ExecSpace, Model::history>::values_view history_view() const {
-    if constexpr (Model::history > 0) return history_.values();
-    else return dummy_history_;
+    if constexpr (Model::history > 0)
+      return history_.values();
+    else
+      return dummy_history_;
   }
 
   // Stops the run with a message that says what to change.
@@ -124,8 +126,8 @@ class DemSystem {
       throw PhysicsError(msg.str());
     }
     if (m.max_overlap > params_.max_overlap) {
-      msg << "runaway overlap at t = " << time_ << " (step " << steps_ << "): delta/a = "
-          << m.max_overlap << " exceeds the limit " << params_.max_overlap
+      msg << "runaway overlap at t = " << time_ << " (step " << steps_
+          << "): delta/a = " << m.max_overlap << " exceeds the limit " << params_.max_overlap
           << " of binary contact laws; reduce the strain rate, the final volume fraction, the"
           << " initial velocities or dt";
       throw PhysicsError(msg.str());
@@ -157,7 +159,8 @@ class DemSystem {
   static constexpr bool kRot = Model::rotations;
 
   bool rebuild_due(double max_sq) const {
-    if (params_.rebuild_every > 0) return steps_ % params_.rebuild_every == params_.rebuild_every - 1;
+    if (params_.rebuild_every > 0)
+      return steps_ % params_.rebuild_every == params_.rebuild_every - 1;
     return nl_.needs_rebuild(max_sq, box_);
   }
   void forces(double dt) {
@@ -205,11 +208,11 @@ class DemSystem {
     if (params_.dt > params_.dt_guard * tc) {
       std::ostringstream msg;
       msg.precision(4);
-      msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard
-          << " = " << params_.dt_guard * tc << " for the stiffest, lightest pair (stiffness "
-          << model_.stiffness(params_.max_overlap * a_min_, 2 * a_max_) << ", reduced mass " << m_red << ", contact duration " << tc
-          << "): set dt <= " << params_.dt_guard * tc << " (t_c/50 = " << tc / 50
-          << " is the usual choice)";
+      msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard << " = "
+          << params_.dt_guard * tc << " for the stiffest, lightest pair (stiffness "
+          << model_.stiffness(params_.max_overlap * a_min_, 2 * a_max_) << ", reduced mass "
+          << m_red << ", contact duration " << tc << "): set dt <= " << params_.dt_guard * tc
+          << " (t_c/50 = " << tc / 50 << " is the usual choice)";
       throw PhysicsError(msg.str());
     }
   }
@@ -225,7 +228,8 @@ class DemSystem {
   double particle_volume_ = 0.0;
   double a_min_ = 1e300, a_max_ = 0.0;
   ContactHistory<ExecSpace, Model::history> history_;
-  typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history", 1, 1};
+  typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history",
+                                                                                 1, 1};
   StepProfile* profile_ = nullptr;
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both

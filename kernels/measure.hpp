@@ -14,22 +14,22 @@
 namespace granular {
 
 struct Measurements {
-  double ekin = 0;        // translational + rotational kinetic energy
-  double ekin_rot = 0;    // its rotational part
-  double chi = 0;         // contact-number fluctuation <(Z - Zbar)^2>/Zbar^2 over non-rattlers
+  double ekin = 0;      // translational + rotational kinetic energy
+  double ekin_rot = 0;  // its rotational part
+  double chi = 0;       // contact-number fluctuation <(Z - Zbar)^2>/Zbar^2 over non-rattlers
   double contact_histogram[7] = {};  // fraction of particles with 0, 1, ..., 5, >= 6 contacts
-  double fabric[6] = {};  // (1/V) sum_p V_p sum_c n n  (xx yy zz xy xz yz)
-  double epot = 0;        // elastic energy stored in contacts
+  double fabric[6] = {};             // (1/V) sum_p V_p sum_c n n  (xx yy zz xy xz yz)
+  double epot = 0;                   // elastic energy stored in contacts
   double stress[6] = {};  // xx yy zz xy xz yz; static (contact) part, positive in compression
   double stress_normal[6] = {};      // the same sum with normal contact forces only
   double stress_tangential[6] = {};  // ... and with tangential contact forces only
-  double pressure = 0;    // tr(stress)/3
-  double contacts = 0;    // number of contacts (pairs)
-  double z = 0;           // 2 contacts / N
-  double z_corrected = 0; // contacts per non-rattler, counted on non-rattlers only
-  double rattlers = 0;    // particles with fewer contacts than the threshold
-  double phi = 0;         // volume fraction (overlaps ignored)
-  double max_overlap = 0; // largest delta / min(a_i, a_j)
+  double pressure = 0;               // tr(stress)/3
+  double contacts = 0;               // number of contacts (pairs)
+  double z = 0;                      // 2 contacts / N
+  double z_corrected = 0;            // contacts per non-rattler, counted on non-rattlers only
+  double rattlers = 0;               // particles with fewer contacts than the threshold
+  double phi = 0;                    // volume fraction (overlaps ignored)
+  double max_overlap = 0;            // largest delta / min(a_i, a_j)
   double volume = 0;
 };
 
@@ -55,7 +55,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
       "dem::measure::per_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i, double& mo) {
         constexpr int H = Model::history;  // declared here: nvcc must not capture it
-        (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
+        (void)history.extent(0);           // nvcc: capture outside the constexpr-if that uses it
         double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0}, fab[6] = {0, 0, 0, 0, 0, 0};
         double epot = 0.0;
         int c = 0;

@@ -216,8 +216,8 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   auto radius = p.radius;
   const PeriodicBox b = box;
   auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
-  const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles, b,
-                                     skin_, nc_[0], nc_[1], nc_[2]};
+  const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles,
+                                     b, skin_,  nc_[0],  nc_[1],     nc_[2]};
 
   // count -> scan -> fill: exact capacity, no overflow to detect.
   auto offsets = offsets_;

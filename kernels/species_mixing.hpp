@@ -20,11 +20,13 @@ inline double harmonic_mix(double a, double b) {
 inline LinearNormal::Params mix(const LinearNormal::Params& a, const LinearNormal::Params& b) {
   return {harmonic_mix(a.kn, b.kn), harmonic_mix(a.gn, b.gn)};
 }
-inline HystereticNormal::Params mix(const HystereticNormal::Params& a, const HystereticNormal::Params& b) {
+inline HystereticNormal::Params mix(const HystereticNormal::Params& a,
+                                    const HystereticNormal::Params& b) {
   return {harmonic_mix(a.k1, b.k1), harmonic_mix(a.k2, b.k2), harmonic_mix(a.kc, b.kc),
           harmonic_mix(a.gn, b.gn)};
 }
-inline CoulombTangential::Params mix(const CoulombTangential::Params& a, const CoulombTangential::Params& b) {
+inline CoulombTangential::Params mix(const CoulombTangential::Params& a,
+                                     const CoulombTangential::Params& b) {
   if (a.law != b.law) throw std::invalid_argument("species pair mixes different tangential laws");
   return {harmonic_mix(a.kt, b.kt), harmonic_mix(a.gt, b.gt), harmonic_mix(a.mu_s, b.mu_s),
           harmonic_mix(a.mu_d, b.mu_d), a.law};

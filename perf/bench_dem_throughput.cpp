@@ -25,8 +25,8 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "machine_info.hpp"
-#include "scenarios/dem_output.hpp"
 #include "scenarios/contact_config.hpp"
+#include "scenarios/dem_output.hpp"
 #include "scenarios/packing.hpp"
 
 using namespace granular;
@@ -84,14 +84,16 @@ HostParticles dense_packing(int n, PeriodicBox& box, const std::string& cache_di
   }
   std::cerr << "preparing a dense packing of " << n << " spheres (cached in " << path << ")\n";
   GasSpec g;
-  g.count = n, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.3, g.seed = 12345;
+  g.count = n, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.3,
+  g.seed = 12345;
   const HostParticles gas = random_gas(g, box);
   DemParams prm = bench_params();
   prm.dt = 0.004;
   prm.damping.translational = 100;
   prm.damping.rotational = 20;
   using Prep = ContactModel<LinearNormal, CoulombTangential>;
-  const Prep prep{LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 500, 0.1, 0.1), {}};
+  const Prep prep{
+      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 500, 0.1, 0.1), {}};
   DemSystem<Exec, Prep> sys(Particles<Exec>::from_host(gas), box, prep, prm);
   const double rate = -2e-2 / 3;  // volumetric 2e-2 per us
   const long steps = static_cast<long>(std::log(0.64 / 0.3) / (-3 * std::log1p(rate * prm.dt)));
@@ -136,14 +138,22 @@ int main(int argc, char** argv) {
         if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
         return argv[++i];
       };
-      if (a == "--sizes") sizes = next();
-      else if (a == "--reps") reps = std::stoi(next());
-      else if (a == "--steps") steps = std::stol(next());
-      else if (a == "--warmup") warmup = std::stol(next());
-      else if (a == "--data") data = next();
-      else if (a == "--physics") physics = next();
-      else if (a == "--out") out = next();
-      else if (a == "--cache") cache_dir = next();
+      if (a == "--sizes")
+        sizes = next();
+      else if (a == "--reps")
+        reps = std::stoi(next());
+      else if (a == "--steps")
+        steps = std::stol(next());
+      else if (a == "--warmup")
+        warmup = std::stol(next());
+      else if (a == "--data")
+        data = next();
+      else if (a == "--physics")
+        physics = next();
+      else if (a == "--out")
+        out = next();
+      else if (a == "--cache")
+        cache_dir = next();
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
@@ -157,7 +167,8 @@ int main(int argc, char** argv) {
     result["benchmark"] = "dem_throughput";
     result["machine"] = perf::machine_info();
     result["triad_bandwidth_GBs"] = bandwidth / 1e9;
-    result["parameters"] = "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
+    result["parameters"] =
+        "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
     Json rows = Json::array();
@@ -165,95 +176,101 @@ int main(int argc, char** argv) {
     const std::vector<int> ns = data.empty() ? parse_sizes(sizes) : std::vector<int>{0};
     std::vector<std::string> physics_list;
     {
-      std::stringstream ss(physics == "all" ? "frictionless,friction,rolling,hertz_mindlin,hysteretic" : physics);
+      std::stringstream ss(
+          physics == "all" ? "frictionless,friction,rolling,hertz_mindlin,hysteretic" : physics);
       std::string item;
       while (std::getline(ss, item, ',')) physics_list.push_back(item);
     }
     for (const std::string& phys : physics_list)
-    for (int n_req : ns) with_contact_model(physics_config(phys), [&](const auto& model) {
-      using Model = std::decay_t<decltype(model)>;
-      PeriodicBox box;
-      HostParticles host;
-      std::string source;
-      if (!data.empty()) {
-        LammpsData d = read_lammps_data(data);
-        host = d.particles;
-        for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
-        source = data;
-      } else {
-        host = dense_packing(n_req, box, cache_dir);
-        source = "generated (seed 12345)";
-      }
-      const int n = host.size();
-      std::vector<double> rates;
-      StepProfile prof;
-      double z_start = 0, z_end = 0, phi = 0, ekin_start = 0, ekin_end = 0, erot_start = 0, erot_end = 0;
-      long builds = 0;
-      double entries = 0;
-      for (int r = 0; r < reps; ++r) {
-        DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, bench_params());
-        sys.step(warmup);
-        const Measurements m0 = sys.measure();
-        const long builds0 = sys.neighbor_list().builds();
-        Kokkos::fence();
-        Kokkos::Timer t;
-        sys.step(steps);
-        Kokkos::fence();
-        const double sec = t.seconds();
-        rates.push_back(static_cast<double>(n) * steps / sec);
-        const Measurements m1 = sys.measure();
-        z_start = m0.z, z_end = m1.z, phi = m1.phi;
-        ekin_start = m0.ekin, ekin_end = m1.ekin, erot_start = m0.ekin_rot, erot_end = m1.ekin_rot;
-        builds = sys.neighbor_list().builds() - builds0;
-        entries = sys.neighbor_list().num_entries();
-        if (r == 0) {  // one extra profiled window, not part of the timed figures
-          sys.set_profile(&prof);
-          sys.step(std::min(steps, 500L));
-          sys.set_profile(nullptr);
-        }
-        std::cerr << phys << " N " << n << " rep " << r << ": " << rates.back() / 1e6
-                  << " M particle-steps/s\n";
-      }
-      // Bytes a particle-step touches, counted from the data the kernels read and write
-      // (each access once; neighbour data that hits cache still counts).
-      const double nb = entries / n, contacts = z_end;
-      const double force_bytes = 24 + 24 + 8 + 8 + 24 + nb * (4 + 24 + 8) + contacts * 24;
-      const double integrate_bytes = (48 + 48 + 24 + 8 + 24) + (48 + 24 + 8);
-      const double bytes = force_bytes + integrate_bytes;
-      const double med = median(rates);
-      const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
-      Json row = Json::object();
-      row["physics"] = phys;
-      row["N"] = n;
-      row["source"] = source;
-      row["threads"] = threads;
-      row["phi"] = phi;
-      row["z_start"] = z_start;
-      row["z_end"] = z_end;
-      // Energy unit ug mm^2 / us^2 = 1e-3 J. Translational part separately: that is what
-      // LAMMPS reports as `ke`.
-      row["ekin_after_warmup_J"] = ekin_start * 1e-3;
-      row["ekin_after_timed_run_J"] = ekin_end * 1e-3;
-      row["ekin_translational_after_warmup_J"] = (ekin_start - erot_start) * 1e-3;
-      row["ekin_translational_after_timed_run_J"] = (ekin_end - erot_end) * 1e-3;
-      row["neighbors_per_particle_full_list"] = nb;
-      row["neighbor_builds_in_timed_window"] = builds;
-      row["particle_steps_per_s"] = rates;
-      row["median_particle_steps_per_s"] = med;
-      row["bytes_per_particle_step"] = bytes;
-      row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
-      row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
-      Json split = Json::object();
-      split["force"] = prof.force / prof_total;
-      split["integrate"] = prof.integrate / prof_total;
-      split["neighbor"] = prof.neighbor / prof_total;
-      split["strain"] = prof.strain / prof_total;
-      row["profile_fraction"] = split;
-      rows.push(row);
-      std::cout << phys << " N " << n << " threads " << threads << ": median " << med / 1e6
-                << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step, "
-                << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9 << " GB/s\n";
-    });
+      for (int n_req : ns)
+        with_contact_model(physics_config(phys), [&](const auto& model) {
+          using Model = std::decay_t<decltype(model)>;
+          PeriodicBox box;
+          HostParticles host;
+          std::string source;
+          if (!data.empty()) {
+            LammpsData d = read_lammps_data(data);
+            host = d.particles;
+            for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
+            source = data;
+          } else {
+            host = dense_packing(n_req, box, cache_dir);
+            source = "generated (seed 12345)";
+          }
+          const int n = host.size();
+          std::vector<double> rates;
+          StepProfile prof;
+          double z_start = 0, z_end = 0, phi = 0, ekin_start = 0, ekin_end = 0, erot_start = 0,
+                 erot_end = 0;
+          long builds = 0;
+          double entries = 0;
+          for (int r = 0; r < reps; ++r) {
+            DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model,
+                                       bench_params());
+            sys.step(warmup);
+            const Measurements m0 = sys.measure();
+            const long builds0 = sys.neighbor_list().builds();
+            Kokkos::fence();
+            Kokkos::Timer t;
+            sys.step(steps);
+            Kokkos::fence();
+            const double sec = t.seconds();
+            rates.push_back(static_cast<double>(n) * steps / sec);
+            const Measurements m1 = sys.measure();
+            z_start = m0.z, z_end = m1.z, phi = m1.phi;
+            ekin_start = m0.ekin, ekin_end = m1.ekin, erot_start = m0.ekin_rot,
+            erot_end = m1.ekin_rot;
+            builds = sys.neighbor_list().builds() - builds0;
+            entries = sys.neighbor_list().num_entries();
+            if (r == 0) {  // one extra profiled window, not part of the timed figures
+              sys.set_profile(&prof);
+              sys.step(std::min(steps, 500L));
+              sys.set_profile(nullptr);
+            }
+            std::cerr << phys << " N " << n << " rep " << r << ": " << rates.back() / 1e6
+                      << " M particle-steps/s\n";
+          }
+          // Bytes a particle-step touches, counted from the data the kernels read and write
+          // (each access once; neighbour data that hits cache still counts).
+          const double nb = entries / n, contacts = z_end;
+          const double force_bytes = 24 + 24 + 8 + 8 + 24 + nb * (4 + 24 + 8) + contacts * 24;
+          const double integrate_bytes = (48 + 48 + 24 + 8 + 24) + (48 + 24 + 8);
+          const double bytes = force_bytes + integrate_bytes;
+          const double med = median(rates);
+          const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
+          Json row = Json::object();
+          row["physics"] = phys;
+          row["N"] = n;
+          row["source"] = source;
+          row["threads"] = threads;
+          row["phi"] = phi;
+          row["z_start"] = z_start;
+          row["z_end"] = z_end;
+          // Energy unit ug mm^2 / us^2 = 1e-3 J. Translational part separately: that is what
+          // LAMMPS reports as `ke`.
+          row["ekin_after_warmup_J"] = ekin_start * 1e-3;
+          row["ekin_after_timed_run_J"] = ekin_end * 1e-3;
+          row["ekin_translational_after_warmup_J"] = (ekin_start - erot_start) * 1e-3;
+          row["ekin_translational_after_timed_run_J"] = (ekin_end - erot_end) * 1e-3;
+          row["neighbors_per_particle_full_list"] = nb;
+          row["neighbor_builds_in_timed_window"] = builds;
+          row["particle_steps_per_s"] = rates;
+          row["median_particle_steps_per_s"] = med;
+          row["bytes_per_particle_step"] = bytes;
+          row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
+          row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
+          Json split = Json::object();
+          split["force"] = prof.force / prof_total;
+          split["integrate"] = prof.integrate / prof_total;
+          split["neighbor"] = prof.neighbor / prof_total;
+          split["strain"] = prof.strain / prof_total;
+          row["profile_fraction"] = split;
+          rows.push(row);
+          std::cout << phys << " N " << n << " threads " << threads << ": median " << med / 1e6
+                    << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step, "
+                    << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9
+                    << " GB/s\n";
+        });
     result["rows"] = rows;
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
     write_text_file(out, result.dump());

@@ -15,14 +15,15 @@ double friction(const SceneFile& s, const std::string& key, double def) {
 ContactConfig ContactConfig::read(const SceneFile& s) {
   ContactConfig c;
   c.normal = s.text("contact.normal", "linear");
-  s.require(c.normal == "linear" || c.normal == "hertz" || c.normal == "hysteretic", "contact.normal",
-            "must be \"linear\", \"hertz\" or \"hysteretic\"");
+  s.require(c.normal == "linear" || c.normal == "hertz" || c.normal == "hysteretic",
+            "contact.normal", "must be \"linear\", \"hertz\" or \"hysteretic\"");
   c.tangential = s.text("contact.tangential", "none");
   s.require(c.tangential == "none" || c.tangential == "coulomb", "contact.tangential",
             "must be \"none\" or \"coulomb\"");
   c.rolling = s.flag("contact.rolling", false);
-  s.require(!(c.rolling && c.tangential == "none"), "contact.rolling",
-            "needs contact.tangential = \"coulomb\" (rolling resistance acts on rotating particles)");
+  s.require(
+      !(c.rolling && c.tangential == "none"), "contact.rolling",
+      "needs contact.tangential = \"coulomb\" (rolling resistance acts on rotating particles)");
 
   if (c.normal == "linear") {
     c.linear.kn = s.real("contact.kn");
@@ -32,15 +33,17 @@ ContactConfig ContactConfig::read(const SceneFile& s) {
   } else if (c.normal == "hertz") {
     const std::string form = s.text("contact.hertz_form", "stiffness");
     if (form == "stiffness") {
-      c.hertz = HertzNormal::stiffness_form(s.real("contact.shear_modulus"), s.real("contact.poisson"),
-                                            s.real("contact.alpha_n", 0.0));
+      c.hertz =
+          HertzNormal::stiffness_form(s.real("contact.shear_modulus"), s.real("contact.poisson"),
+                                      s.real("contact.alpha_n", 0.0));
     } else if (form == "modulus") {
       const double E = s.real("contact.young_modulus"), nu = s.real("contact.poisson");
       c.hertz = HertzNormal::modulus_form(E, nu, E, nu, s.real("contact.gamma", 0.0));
     } else {
       s.require(false, "contact.hertz_form", "must be \"stiffness\" or \"modulus\"");
     }
-    s.require(c.hertz.K > 0, "contact.hertz_form", "parameters give a non-positive Hertz coefficient");
+    s.require(c.hertz.K > 0, "contact.hertz_form",
+              "parameters give a non-positive Hertz coefficient");
   } else {
     c.hysteretic.k2 = s.real("contact.k2");
     c.hysteretic.k1 = s.real("contact.k1");
@@ -76,12 +79,15 @@ ContactConfig ContactConfig::read(const SceneFile& s) {
     const double mu = friction(s, "contact.mu", 0.5);
     c.coulomb.mu_s = friction(s, "contact.mu_static", mu);
     c.coulomb.mu_d = friction(s, "contact.mu_dynamic", mu);
-    s.require(c.coulomb.mu_d <= c.coulomb.mu_s, "contact.mu_dynamic", "must not exceed contact.mu_static");
+    s.require(c.coulomb.mu_d <= c.coulomb.mu_s, "contact.mu_dynamic",
+              "must not exceed contact.mu_static");
   }
   if (c.rolling) {
     auto& r = c.rolling_params;
-    r.kr = s.real("contact.kr"), r.gr = s.real("contact.gamma_r", 0.0), r.mur = friction(s, "contact.mu_r", 0.1);
-    r.ko = s.real("contact.ko"), r.go = s.real("contact.gamma_o", 0.0), r.muo = friction(s, "contact.mu_o", 0.1);
+    r.kr = s.real("contact.kr"), r.gr = s.real("contact.gamma_r", 0.0),
+    r.mur = friction(s, "contact.mu_r", 0.1);
+    r.ko = s.real("contact.ko"), r.go = s.real("contact.gamma_o", 0.0),
+    r.muo = friction(s, "contact.mu_o", 0.1);
   }
   return c;
 }

@@ -13,8 +13,8 @@
 namespace granular {
 
 struct ContactConfig {
-  std::string normal = "linear";      // linear | hertz | hysteretic
-  std::string tangential = "none";    // none | coulomb
+  std::string normal = "linear";    // linear | hertz | hysteretic
+  std::string tangential = "none";  // none | coulomb
   bool rolling = false;
   LinearNormal::Params linear;
   HertzNormal::Params hertz;
@@ -49,9 +49,12 @@ void with_contact_model(const ContactConfig& c, F&& f) {
       with_tangential(NoTangential{});
     }
   };
-  if (c.normal == "linear") with_normal(LinearNormal{PairTable<LinearNormal::Params>::uniform(c.linear)});
-  else if (c.normal == "hertz") with_normal(HertzNormal{PairTable<HertzNormal::Params>::uniform(c.hertz)});
-  else with_normal(HystereticNormal{PairTable<HystereticNormal::Params>::uniform(c.hysteretic)});
+  if (c.normal == "linear")
+    with_normal(LinearNormal{PairTable<LinearNormal::Params>::uniform(c.linear)});
+  else if (c.normal == "hertz")
+    with_normal(HertzNormal{PairTable<HertzNormal::Params>::uniform(c.hertz)});
+  else
+    with_normal(HystereticNormal{PairTable<HystereticNormal::Params>::uniform(c.hysteretic)});
 }
 
 }  // namespace granular

@@ -52,7 +52,7 @@ double relax(System& sys, double ratio, long max_steps, long every = 500) {
 }
 
 struct Moduli {
-  double K = 0, G = 0, M = 0;        // bulk, shear, P-wave (uniaxial) moduli
+  double K = 0, G = 0, M = 0;                 // bulk, shear, P-wave (uniaxial) moduli
   double K_n = 0, K_t = 0, G_n = 0, G_t = 0;  // from normal / tangential contact forces
 };
 
@@ -66,7 +66,8 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
   const double dt = sys.params().dt;
   auto strain = [&](const std::array<double, 3>& pattern, double sign) {
     double rate[3];
-    for (int d = 0; d < 3; ++d) rate[d] = std::expm1(-sign * amplitude * pattern[d] / strain_steps) / dt;
+    for (int d = 0; d < 3; ++d)
+      rate[d] = std::expm1(-sign * amplitude * pattern[d] / strain_steps) / dt;
     sys.set_strain_rate(rate[0], rate[1], rate[2]);
     sys.step(strain_steps);
     sys.set_strain_rate(0, 0, 0);
@@ -90,13 +91,16 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
   out.K = (b.pressure - a.pressure) / ev;
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
-  if (reversal_residual) *reversal_residual = (sys.measure().pressure - a.pressure) / (b.pressure - a.pressure);
+  if (reversal_residual)
+    *reversal_residual = (sys.measure().pressure - a.pressure) / (b.pressure - a.pressure);
   run({1, -1, 0}, a, b, e);
   const double ed = 2 * (e[0] - e[1]);
   out.G = ((b.stress[0] - b.stress[1]) - (a.stress[0] - a.stress[1])) / ed;
-  out.G_n = ((b.stress_normal[0] - b.stress_normal[1]) - (a.stress_normal[0] - a.stress_normal[1])) / ed;
+  out.G_n =
+      ((b.stress_normal[0] - b.stress_normal[1]) - (a.stress_normal[0] - a.stress_normal[1])) / ed;
   out.G_t = ((b.stress_tangential[0] - b.stress_tangential[1]) -
-             (a.stress_tangential[0] - a.stress_tangential[1])) / ed;
+             (a.stress_tangential[0] - a.stress_tangential[1])) /
+            ed;
   run({1, 0, 0}, a, b, e);
   out.M = (b.stress[0] - a.stress[0]) / e[0];
   return out;

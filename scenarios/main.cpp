@@ -5,8 +5,8 @@
 #include <iostream>
 
 #include "core/error.hpp"
-#include "core/scene_file.hpp"
 #include "core/output.hpp"
+#include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "scenarios/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -31,8 +31,8 @@ std::string version_line() {
   const int v = KOKKOS_VERSION;
   return std::string("granular ") + GRANULAR_VERSION + "\nkokkos " + std::to_string(v / 10000) +
          "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
-         " backends: " + backends() + "\ndefault execution space: " +
-         Kokkos::DefaultExecutionSpace::name();
+         " backends: " + backends() +
+         "\ndefault execution space: " + Kokkos::DefaultExecutionSpace::name();
 }
 
 }  // namespace
@@ -49,7 +49,8 @@ int main(int argc, char** argv) {
   bool quiet = false, resume = false;
   run->add_option("scene", scene_path, "scene file (TOML)")->required()->check(CLI::ExistingFile);
   run->add_option("--out", out_dir, "output directory (default out/<scene file name>)");
-  run->add_option("--threads", threads, "host threads (default: all cores)")->check(CLI::PositiveNumber);
+  run->add_option("--threads", threads, "host threads (default: all cores)")
+      ->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no progress lines");
   run->add_flag("--resume", resume, "continue from the checkpoint in the output directory");
 
@@ -58,7 +59,9 @@ int main(int argc, char** argv) {
   auto* theory = app.add_subcommand("theory", "EMT and fluctuation-theory moduli (JSON)");
   granular::TheoryInput tin;
   theory->add_option("--phi", tin.phi, "volume fraction")->required()->check(CLI::Range(0.0, 1.0));
-  theory->add_option("--z", tin.z, "corrected coordination number")->required()->check(CLI::PositiveNumber);
+  theory->add_option("--z", tin.z, "corrected coordination number")
+      ->required()
+      ->check(CLI::PositiveNumber);
   theory->add_option("--chi", tin.chi, "contact-number fluctuation (default: closure 1/(phi Z))");
   theory->add_option("--kt-kn", tin.kt_kn, "tangential over normal stiffness (default 0)");
   theory->add_option("--D", tin.D, "size moment <d^2>/<d^3> x dbar (default 1.15)");
@@ -69,7 +72,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (list->parsed()) {
-    for (const auto& e : granular::scene_registry()) std::cout << e.name << "\t" << e.description << "\n";
+    for (const auto& e : granular::scene_registry())
+      std::cout << e.name << "\t" << e.description << "\n";
     return 0;
   }
   if (theory->parsed()) {
@@ -98,9 +102,8 @@ int main(int argc, char** argv) {
     auto scene = granular::SceneFile::load(scene_path);
     const std::string name = scene.text("scene");
     granular::RunOptions opts;
-    opts.out_dir = out_dir.empty()
-                       ? "out/" + std::filesystem::path(scene_path).stem().string()
-                       : out_dir;
+    opts.out_dir =
+        out_dir.empty() ? "out/" + std::filesystem::path(scene_path).stem().string() : out_dir;
     opts.progress = !quiet;
     opts.resume = resume;
     const granular::SceneEntry* entry = nullptr;
@@ -109,8 +112,9 @@ int main(int argc, char** argv) {
     if (!entry) {
       std::string known;
       for (const auto& e : granular::scene_registry()) known += std::string(" ") + e.name;
-      throw granular::InputError("scene file " + scene_path + ": key 'scene' names an unknown scene '" +
-                                 name + "' (known:" + known + ")");
+      throw granular::InputError("scene file " + scene_path +
+                                 ": key 'scene' names an unknown scene '" + name +
+                                 "' (known:" + known + ")");
     }
     entry->run(scene, opts);
     std::cout << "results in " << opts.out_dir << "\n";

@@ -6,20 +6,20 @@
 namespace granular {
 
 struct TheoryInput {
-  double phi = 0;       // volume fraction
-  double z = 0;         // corrected coordination number Z (non-rattlers)
-  double chi = -1;      // contact-number fluctuation; < 0: use the closure chi = 1/(phi Z)
-  double kt_kn = 0;     // tangential over normal stiffness
-  double D = 1.15;      // size moment <d^2>/<d^3> scaled by dbar (1.15 for w = 3, uniform)
+  double phi = 0;    // volume fraction
+  double z = 0;      // corrected coordination number Z (non-rattlers)
+  double chi = -1;   // contact-number fluctuation; < 0: use the closure chi = 1/(phi Z)
+  double kt_kn = 0;  // tangential over normal stiffness
+  double D = 1.15;   // size moment <d^2>/<d^3> scaled by dbar (1.15 for w = 3, uniform)
 };
 
 struct TheoryResult {
-  double chi = 0;                 // the value used
-  double rho = 0, zeta = 0;       // first-ring corrections
-  double rho_s = 0, zeta_s = 0;   // second-ring corrections rho*, zeta*
+  double chi = 0;                // the value used
+  double rho = 0, zeta = 0;      // first-ring corrections
+  double rho_s = 0, zeta_s = 0;  // second-ring corrections rho*, zeta*
   double K_emt = 0, G_emt = 0;
-  double K_ft1 = 0, G_ft1 = 0;    // fluctuation theory, first ring (rho*, zeta* dropped)
-  double K_ft2 = 0, G_ft2 = 0;    // fluctuation theory, second ring
+  double K_ft1 = 0, G_ft1 = 0;  // fluctuation theory, first ring (rho*, zeta* dropped)
+  double K_ft2 = 0, G_ft2 = 0;  // fluctuation theory, second ring
 };
 
 TheoryResult moduli_theory(const TheoryInput& in);

@@ -42,7 +42,8 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
     p[0] += m * h.vx[i], p[1] += m * h.vy[i], p[2] += m * h.vz[i];
     mtot += m;
   }
-  for (int i = 0; i < n; ++i) h.vx[i] -= p[0] / mtot, h.vy[i] -= p[1] / mtot, h.vz[i] -= p[2] / mtot;
+  for (int i = 0; i < n; ++i)
+    h.vx[i] -= p[0] / mtot, h.vy[i] -= p[1] / mtot, h.vz[i] -= p[2] / mtot;
 
   // Grid hash with cells no smaller than the largest diameter.
   const int nc = std::max(1, static_cast<int>(edge / s.diameter_max));
@@ -50,7 +51,8 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
   std::vector<std::vector<int>> cells(static_cast<size_t>(nc) * nc * nc);
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return h.radius[a] > h.radius[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return h.radius[a] > h.radius[b]; });
   const PeriodicBox b = box;
   for (int i : order) {
     Stream st(s.seed ^ 0x5bd1e995ULL, static_cast<std::uint64_t>(i));
@@ -64,7 +66,8 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
       for (int dz = -1; dz <= 1 && ok; ++dz)
         for (int dy = -1; dy <= 1 && ok; ++dy)
           for (int dx = -1; dx <= 1 && ok; ++dx) {
-            const int c = (((cz + dz + nc) % nc) * nc + (cy + dy + nc) % nc) * nc + (cx + dx + nc) % nc;
+            const int c =
+                (((cz + dz + nc) % nc) * nc + (cy + dy + nc) % nc) * nc + (cx + dx + nc) % nc;
             for (int j : cells[c]) {
               const double rx = b.min_image(x - h.x[j], 0), ry = b.min_image(y - h.y[j], 1),
                            rz = b.min_image(z - h.z[j], 2);
@@ -81,8 +84,9 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
       placed = true;
     }
     if (!placed)
-      throw InputError("could not insert particle " + std::to_string(i) + " without overlap at phi = " +
-                       std::to_string(s.phi) + ": lower the gas volume fraction");
+      throw InputError("could not insert particle " + std::to_string(i) +
+                       " without overlap at phi = " + std::to_string(s.phi) +
+                       ": lower the gas volume fraction");
   }
   return h;
 }

@@ -78,10 +78,12 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   double s1 = 0, s2 = 0, s3 = 0;
   for (double a : host.radius) s1 += 2 * a, s2 += 4 * a * a, s3 += 8 * a * a * a;
   const double dbar = s1 / host.size(), D = s2 / s3 * dbar;
-  const double kn_ref = contact.normal == "linear" ? contact.linear.kn
-                        : contact.normal == "hysteretic" ? contact.hysteretic.k2 : 0.0;
+  const double kn_ref = contact.normal == "linear"       ? contact.linear.kn
+                        : contact.normal == "hysteretic" ? contact.hysteretic.k2
+                                                         : 0.0;
   const double kt_kn = contact.tangential == "coulomb" && contact.coulomb.law == 0 && kn_ref > 0
-                           ? contact.coulomb.kt / kn_ref : 0.0;
+                           ? contact.coulomb.kt / kn_ref
+                           : 0.0;
 
   Json summary = Json::object();
   summary["scene"] = "elastic_moduli";
@@ -101,14 +103,14 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       prep_phi.push_back(m.phi), prep_p.push_back(m.pressure), prep_z.push_back(m.z_corrected);
     };
     Progress progress("preparation", 4 + static_cast<long>(targets.size()), opts.progress);
-    strain_to_phi(sys, phi0, -axis_rate, 500, sample);                 // 2. compress to phi_0
+    strain_to_phi(sys, phi0, -axis_rate, 500, sample);  // 2. compress to phi_0
     progress.update(1);
-    relax(sys, relax_ratio, relax_max);                                  // 3. relax
+    relax(sys, relax_ratio, relax_max);  // 3. relax
     progress.update(2);
-    strain_to_phi(sys, phi_max, -axis_rate, 500, sample);              // 4. compress to phi_max
+    strain_to_phi(sys, phi_max, -axis_rate, 500, sample);  // 4. compress to phi_max
     progress.update(3);
     std::vector<double> sorted = targets;
-    std::sort(sorted.rbegin(), sorted.rend());                          // 5. unload, saving states
+    std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
     long done = 3;
     for (double t : sorted) {
       strain_to_phi(sys, t, axis_rate, 500, sample);
@@ -129,16 +131,31 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       const TheoryResult thc = moduli_theory(ti);
       const double scale = kn_ref > 0 ? dbar / kn_ref : 1.0;
       const std::map<std::string, double> row = {
-          {"phi", m.phi}, {"z_corrected", m.z_corrected}, {"chi", m.chi},
-          {"rattler_fraction", m.rattlers / host.size()}, {"pressure_star", m.pressure * scale},
-          {"ekin_over_epot", ratio}, {"K_star", mod.K * scale}, {"G_star", mod.G * scale},
-          {"M_star", mod.M * scale}, {"K_n_star", mod.K_n * scale}, {"K_t_star", mod.K_t * scale},
-          {"G_n_star", mod.G_n * scale}, {"G_t_star", mod.G_t * scale},
+          {"phi", m.phi},
+          {"z_corrected", m.z_corrected},
+          {"chi", m.chi},
+          {"rattler_fraction", m.rattlers / host.size()},
+          {"pressure_star", m.pressure * scale},
+          {"ekin_over_epot", ratio},
+          {"K_star", mod.K * scale},
+          {"G_star", mod.G * scale},
+          {"M_star", mod.M * scale},
+          {"K_n_star", mod.K_n * scale},
+          {"K_t_star", mod.K_t * scale},
+          {"G_n_star", mod.G_n * scale},
+          {"G_t_star", mod.G_t * scale},
           {"M_over_K_plus_4G_3", mod.M / (mod.K + 4 * mod.G / 3)},
           {"isotropic_reversal_residual", reversal},
-          {"K_emt", th.K_emt}, {"G_emt", th.G_emt}, {"K_ft1", th.K_ft1}, {"G_ft1", th.G_ft1},
-          {"K_ft2", th.K_ft2}, {"G_ft2", th.G_ft2}, {"K_ft2_closure", thc.K_ft2},
-          {"G_ft2_closure", thc.G_ft2}, {"rho", th.rho}, {"zeta", th.zeta}};
+          {"K_emt", th.K_emt},
+          {"G_emt", th.G_emt},
+          {"K_ft1", th.K_ft1},
+          {"G_ft1", th.G_ft1},
+          {"K_ft2", th.K_ft2},
+          {"G_ft2", th.G_ft2},
+          {"K_ft2_closure", thc.K_ft2},
+          {"G_ft2_closure", thc.G_ft2},
+          {"rho", th.rho},
+          {"zeta", th.zeta}};
       Json r = Json::object();
       for (const auto& [k, v] : row) r[k] = v, table[k].push_back(v);
       rows.push(r);

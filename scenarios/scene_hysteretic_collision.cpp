@@ -43,7 +43,8 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   for (double ratio : kc_ratios) {
     ContactModel<HystereticNormal> model{HystereticNormal::uniform(k1, k2, ratio * k2, gn), {}, {}};
     CollisionSetup s;
-    s.radius1 = 0.5 * d1, s.radius2 = 0.5 * d2, s.density = density, s.speed = speed, s.record = true;
+    s.radius1 = 0.5 * d1, s.radius2 = 0.5 * d2, s.density = density, s.speed = speed,
+    s.record = true;
     s.dt = M_PI * std::sqrt(m / std::max(k2, ratio * k2)) / resolution;
     const auto r = collide_head_on<Kokkos::DefaultExecutionSpace>(model, s);
     const bool separated = r.duration > 0;
@@ -67,7 +68,8 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   summary["cases"] = cases;
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
-  if (opts.charts) run_plot_script("hysteretic_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
+  if (opts.charts)
+    run_plot_script("hysteretic_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

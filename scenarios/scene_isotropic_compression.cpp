@@ -24,21 +24,45 @@ using Exec = Kokkos::DefaultExecutionSpace;
 using System = DemSystem<Exec, FrictionlessLinear>;
 
 // Columns of the time series, in file order.
-const char* const kSeries[] = {"time",  "step", "phi",      "pressure",  "pressure_star",
-                               "z",     "z_corrected", "rattler_fraction", "ekin", "epot",
-                               "ekin_over_epot", "max_overlap", "stress_xx", "stress_yy",
-                               "stress_zz", "neighbor_builds", "phase"};
+const char* const kSeries[] = {"time",
+                               "step",
+                               "phi",
+                               "pressure",
+                               "pressure_star",
+                               "z",
+                               "z_corrected",
+                               "rattler_fraction",
+                               "ekin",
+                               "epot",
+                               "ekin_over_epot",
+                               "max_overlap",
+                               "stress_xx",
+                               "stress_yy",
+                               "stress_zz",
+                               "neighbor_builds",
+                               "phase"};
 
 struct Series {
   std::map<std::string, std::vector<double>> col;
   void add(const System& sys, const Measurements& m, double d_mean, double phase) {
     const double kn = sys.model().normal.table.p[0][0].kn;
-    const double vals[] = {sys.time(), static_cast<double>(sys.steps()), m.phi, m.pressure,
-                           m.pressure * d_mean / kn, m.z, m.z_corrected,
-                           m.rattlers / sys.particles().n, m.ekin, m.epot,
-                           m.epot > 0 ? m.ekin / m.epot : NAN, m.max_overlap, m.stress[0],
-                           m.stress[1], m.stress[2],
-                           static_cast<double>(sys.neighbor_list().builds()), phase};
+    const double vals[] = {sys.time(),
+                           static_cast<double>(sys.steps()),
+                           m.phi,
+                           m.pressure,
+                           m.pressure * d_mean / kn,
+                           m.z,
+                           m.z_corrected,
+                           m.rattlers / sys.particles().n,
+                           m.ekin,
+                           m.epot,
+                           m.epot > 0 ? m.ekin / m.epot : NAN,
+                           m.max_overlap,
+                           m.stress[0],
+                           m.stress[1],
+                           m.stress[2],
+                           static_cast<double>(sys.neighbor_list().builds()),
+                           phase};
     for (size_t c = 0; c < std::size(kSeries); ++c) col[kSeries[c]].push_back(vals[c]);
   }
   void write(H5Writer& out, const std::string& group) const {
@@ -143,7 +167,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     H5Writer out(opts.out_dir + "/last_state.h5");
     write_state(out, "/state", sys.particles(), sys.box(), gas.density);
     out.commit();
-    write_particle_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5", "/state", sys.particles().n);
+    write_particle_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5", "/state",
+                        sys.particles().n);
   };
 
   if (opts.resume) {  // forces as the uninterrupted run had them at its checkpoint
@@ -165,12 +190,13 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       sys.check_health(m);
       series.add(sys, m, d_mean, compressing ? 0 : 1);
       char extra[96];
-      std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi, m.pressure * d_mean / kn,
-                    m.z_corrected);
+      std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi,
+                    m.pressure * d_mean / kn, m.z_corrected);
       progress.update(sys.steps() - step0, extra);
       if (sys.steps() / checkpoint_every != (sys.steps() - n) / checkpoint_every) save_checkpoint();
       if (stop_after > 0 && sys.steps() >= stop_after) {
-        std::cerr << "stopped after step " << sys.steps() << " (run.stop_after); continue with --resume\n";
+        std::cerr << "stopped after step " << sys.steps()
+                  << " (run.stop_after); continue with --resume\n";
         return;
       }
     }
@@ -187,7 +213,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "kn", kn);
   h5.attribute("/", "mean_diameter", d_mean);
   h5.commit();
-  write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state", sys.particles().n);
+  write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state",
+                      sys.particles().n);
 
   // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.
   const auto& phi = series.col.at("phi");
@@ -226,7 +253,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
-  if (opts.charts) run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
+  if (opts.charts)
+    run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

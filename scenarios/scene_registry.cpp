@@ -12,7 +12,8 @@ const std::vector<SceneEntry>& scene_registry() {
        run_isotropic_compression},
       {"hysteretic_collision", "head-on collisions with the hysteretic adhesive contact law",
        run_hysteretic_collision},
-      {"elastic_moduli", "preparation protocol, unloading-branch configurations, elastic probing vs theory",
+      {"elastic_moduli",
+       "preparation protocol, unloading-branch configurations, elastic probing vs theory",
        run_elastic_moduli},
       // chain scenes
   };

@@ -8,10 +8,10 @@
 namespace granular {
 
 struct RunOptions {
-  std::string out_dir;    // every output file of the run goes here
-  bool progress = true;   // progress lines on stderr
-  bool resume = false;    // continue from <out_dir>/checkpoint.h5 when the scene supports it
-  bool charts = true;     // draw the PNG charts after the data is written
+  std::string out_dir;   // every output file of the run goes here
+  bool progress = true;  // progress lines on stderr
+  bool resume = false;   // continue from <out_dir>/checkpoint.h5 when the scene supports it
+  bool charts = true;    // draw the PNG charts after the data is written
 };
 
 using SceneRunner = void (*)(const SceneFile&, const RunOptions&);

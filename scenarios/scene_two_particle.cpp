@@ -52,7 +52,8 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
       s.dt = normal.contact_duration(m_red) / resolution;
       const auto r = collide_head_on<Kokkos::DefaultExecutionSpace>(model, s);
       const double tc = normal.contact_duration(m_red), e = normal.restitution(m_red);
-      const double dp = std::fabs(r.momentum_after - r.momentum_before) / std::fabs(r.momentum_before);
+      const double dp =
+          std::fabs(r.momentum_after - r.momentum_before) / std::fabs(r.momentum_before);
       Json c = Json::object();
       c["diameter_1"] = d1, c["diameter_2"] = d2, c["mass_ratio_m2_m1"] = m2 / m1;
       c["impact_speed"] = v, c["dt"] = s.dt;
@@ -75,8 +76,9 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
       h5.attribute(g, "mass_ratio", m2 / m1);
       h5.attribute(g, "impact_speed", v);
       h5.attribute(g, "contact_duration_closed_form", tc);
-      std::cout << "m2/m1 = " << m2 / m1 << "  v = " << v << "  t_c = " << r.duration << " (closed form "
-                << tc << ")  e = " << r.restitution << " (closed form " << e << ")\n";
+      std::cout << "m2/m1 = " << m2 / m1 << "  v = " << v << "  t_c = " << r.duration
+                << " (closed form " << tc << ")  e = " << r.restitution << " (closed form " << e
+                << ")\n";
     }
   }
   h5.write("/table/mass_ratio", mass_ratio);
@@ -91,7 +93,8 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   summary["max_rel_error_restitution"] = worst_e;
   summary["max_rel_momentum_change"] = worst_p;
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
-  if (opts.charts) run_plot_script("two_particle_linear.py", opts.out_dir + "/results.h5", opts.out_dir);
+  if (opts.charts)
+    run_plot_script("two_particle_linear.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

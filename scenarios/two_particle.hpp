@@ -14,7 +14,7 @@ namespace granular {
 struct CollisionSetup {
   double radius1 = 1.0, radius2 = 1.0;
   double density = 1.0;
-  double speed = 1.0;  // sphere 1 moves at +speed towards sphere 2 at rest
+  double speed = 1.0;             // sphere 1 moves at +speed towards sphere 2 at rest
   double tangential_speed = 0.0;  // and at this speed along y (oblique impact)
   double spin = 0.0;              // angular velocity of sphere 1 about z
   int species1 = 0, species2 = 0;
@@ -24,13 +24,14 @@ struct CollisionSetup {
 };
 
 struct CollisionResult {
-  double duration = 0;     // measured contact duration
-  double restitution = 0;  // measured normal restitution
+  double duration = 0;                             // measured contact duration
+  double restitution = 0;                          // measured normal restitution
   double momentum_before = 0, momentum_after = 0;  // x-momentum (y, z stay exactly 0)
   double max_energy_error = 0;  // max |E(t) - E(0)| / E(0) over the run (meaningful if undamped)
-  double slip_before = 0, slip_after = 0;  // y-velocity of 1's contact point relative to 2's
+  double slip_before = 0, slip_after = 0;      // y-velocity of 1's contact point relative to 2's
   double vy_rel_before = 0, vy_rel_after = 0;  // relative y-velocity of the centres
-  double angular_momentum_before[3] = {}, angular_momentum_after[3] = {};  // about the centre of mass
+  double angular_momentum_before[3] = {},
+         angular_momentum_after[3] = {};  // about the centre of mass
   double mass1 = 0, mass2 = 0;
   long steps = 0;
   std::vector<double> t, delta, force, energy;
@@ -172,7 +173,8 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
       Kokkos::deep_copy(wh, sys.particles().w);
       for (int i = 0; i < 2; ++i)
         for (int d = 0; d < 3; ++d)
-          v_mid[i][d] = 0.5 * (v_mid[i][d] + vh(i, d)), w_mid[i][d] = 0.5 * (w_mid[i][d] + wh(i, d));
+          v_mid[i][d] = 0.5 * (v_mid[i][d] + vh(i, d)),
+          w_mid[i][d] = 0.5 * (w_mid[i][d] + wh(i, d));
       dissipation(s.gamma_n);
     }
     const double t = k * s.dt;
@@ -191,7 +193,8 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
     }
     r.max_energy_error = std::max(r.max_energy_error, std::fabs(e - e0) / e0);
     // Linear interpolation of the zero crossings of the overlap.
-    if (t_start < 0 && prev_delta <= 0 && delta > 0) t_start = t - s.dt * delta / (delta - prev_delta);
+    if (t_start < 0 && prev_delta <= 0 && delta > 0)
+      t_start = t - s.dt * delta / (delta - prev_delta);
     if (t_start >= 0 && prev_delta > 0 && delta <= 0) {
       t_end = t - s.dt * delta / (delta - prev_delta);
       v_out = vrel;

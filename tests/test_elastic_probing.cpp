@@ -29,7 +29,8 @@ TYPED_TEST(ProbingTest, SimpleCubicLatticeModuliMatchTheExactSpringNetwork) {
   for (int d = 0; d < 3; ++d) box.len[d] = m * a;
   DemParams prm;
   prm.dt = 1e-3, prm.skin = 0.05, prm.damping.translational = 1.0;
-  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(k, 0.0), prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
+                                          frictionless_linear(k, 0.0), prm);
   double residual = 1;
   const Moduli mod = probe_moduli(sys, 1e-6, 200, 50, &residual);
   EXPECT_LT(std::fabs(residual), 1e-6);  // reversing the strain restores the stress

@@ -15,8 +15,8 @@ TEST(ModuliTheory, EffectiveMediumAndFluctuationTheoryMatchHandValues) {
   const auto r = moduli_theory(in);
   // By hand: phi Z D = 4.416; chi = 1/(0.64*6) = 0.2604167.
   EXPECT_NEAR(r.chi, 0.26041667, 1e-8);
-  EXPECT_NEAR(r.K_emt, 4.416 / (3 * M_PI), 1e-12);            // 0.468557
-  EXPECT_NEAR(r.G_emt, 2.2 * 4.416 / (5 * M_PI), 1e-12);      // 0.618495
+  EXPECT_NEAR(r.K_emt, 4.416 / (3 * M_PI), 1e-12);        // 0.468557
+  EXPECT_NEAR(r.G_emt, 2.2 * 4.416 / (5 * M_PI), 1e-12);  // 0.618495
   // rho = (4/24)(1/6 - 1/36) + chi/8 = 0.0231481 + 0.0325521 = 0.0557002
   EXPECT_NEAR(r.rho, 0.05570023, 1e-8);
   // zeta = -(12/156)(1 - 24/78) - (261/676) chi = -0.0532544 - 0.1005455 = -0.1537999

@@ -9,9 +9,9 @@
 
 #include "core/rng.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/neighbor_list.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
+#include "kernels/neighbor_list.hpp"
 #include "kernels/strain.hpp"
 #include "scenarios/packing.hpp"
 
@@ -20,7 +20,8 @@ using namespace granular;
 namespace {
 
 template <class Exec>
-std::vector<std::set<int>> brute_force(const Particles<Exec>& p, const PeriodicBox& box, double extra) {
+std::vector<std::set<int>> brute_force(const Particles<Exec>& p, const PeriodicBox& box,
+                                       double extra) {
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
   auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
   std::vector<std::set<int>> out(p.n);
@@ -131,7 +132,8 @@ TYPED_TEST(NeighborListTest, SkinCriterionNeverMissesATouchingPair) {
     const auto touching = brute_force(p, box, 0.0);
     const auto have = listed(nl, p.n);
     for (int i = 0; i < p.n; ++i)
-      for (int j : touching[i]) EXPECT_TRUE(have[i].count(j)) << "missing touching pair " << i << "-" << j;
+      for (int j : touching[i])
+        EXPECT_TRUE(have[i].count(j)) << "missing touching pair " << i << "-" << j;
     ++checked;
   }
   EXPECT_GT(checked, 10);
@@ -173,7 +175,8 @@ TEST(Measurements, ChiHistogramAndFabricOfASimpleCubicLattice) {
   for (int d = 0; d < 3; ++d) box.len[d] = m;
   DemParams prm;
   prm.dt = 1e-3, prm.skin = 0.05;
-  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(1.0, 0.0), prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
+                                          frictionless_linear(1.0, 0.0), prm);
   const Measurements r = sys.measure();
   EXPECT_DOUBLE_EQ(r.z_corrected, 6.0);
   EXPECT_NEAR(r.chi, 0.0, 1e-14);
@@ -191,12 +194,14 @@ TEST(Measurements, CoordinationChiAndHistogramMatchBruteForceCountOfADensePackin
   using Exec = Kokkos::DefaultExecutionSpace;
   PeriodicBox box;
   GasSpec g;
-  g.count = 400, g.diameter_min = 1.0, g.diameter_max = 3.0, g.density = 2000, g.phi = 0.4, g.seed = 7;
+  g.count = 400, g.diameter_min = 1.0, g.diameter_max = 3.0, g.density = 2000, g.phi = 0.4,
+  g.seed = 7;
   const HostParticles h = random_gas(g, box);
   DemParams prm;
   prm.dt = 0.004, prm.skin = 0.2, prm.damping.translational = 100;
   // Compressed into a contact-rich state below.
-  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(1e5, 1000), prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
+                                          frictionless_linear(1e5, 1000), prm);
   sys.set_strain_rate(-2e-2, -2e-2, -2e-2);
   sys.step(2500);
   const Measurements m = sys.measure();

@@ -19,7 +19,9 @@ TYPED_TEST_SUITE(NormalLawTest, granular::testing::ExecSpaces);
 TYPED_TEST(NormalLawTest, HertzContactDurationFollowsImpactSpeedToTheMinusOneFifth) {
   const double E = 7e4, nu = 0.3;  // N/mm^2
   ContactModel<HertzNormal> model{
-      {PairTable<HertzNormal::Params>::uniform(HertzNormal::modulus_form(E, nu, E, nu, 0.0))}, {}, {}};
+      {PairTable<HertzNormal::Params>::uniform(HertzNormal::modulus_form(E, nu, E, nu, 0.0))},
+      {},
+      {}};
   const double estar = 1.0 / (2 * (1 - nu * nu) / E);
   CollisionSetup s;
   s.radius1 = 1.0, s.radius2 = 0.6, s.density = 2000, s.record = true;
@@ -85,9 +87,12 @@ TEST(HystereticLaw, ScriptedPathReproducesPiecewiseForceAtEverySample) {
       const double f = law.force(s, &h);
       const double want = ref(d);
       EXPECT_NEAR(f, want, 1e-12 * std::fabs(want) + 1e-300) << "kc/k2 " << ratio << " delta " << d;
-      if (d > 0 && std::fabs(f + ratio * k2 * d) < 1e-9 * k2 * d) ++adhesive;
-      else if (d > 0 && std::fabs(f - k1 * d) < 1e-9 * k1 * d) ++loading;
-      else ++unloading;
+      if (d > 0 && std::fabs(f + ratio * k2 * d) < 1e-9 * k2 * d)
+        ++adhesive;
+      else if (d > 0 && std::fabs(f - k1 * d) < 1e-9 * k1 * d)
+        ++loading;
+      else
+        ++unloading;
     }
     // Every branch is visited, so the comparison covers all switches.
     EXPECT_GT(adhesive, 5) << ratio;
@@ -103,7 +108,8 @@ TEST(HystereticLaw, ScriptedPathReproducesPiecewiseForceAtEverySample) {
 TYPED_TEST(NormalLawTest, HystereticCollisionWithoutAdhesionRestitutionIsSqrtK1OverK2) {
   const double k2 = 15e4;
   for (double k1_over_k2 : {0.5, 0.666}) {
-    ContactModel<HystereticNormal> model{HystereticNormal::uniform(k1_over_k2 * k2, k2, 0.0, 0.0), {}, {}};
+    ContactModel<HystereticNormal> model{
+        HystereticNormal::uniform(k1_over_k2 * k2, k2, 0.0, 0.0), {}, {}};
     CollisionSetup s;
     s.radius1 = 1.0, s.radius2 = 0.8, s.density = 2000, s.speed = 0.01;
     const double m1 = 2000 * 4.0 / 3 * M_PI, m2 = m1 * 0.512, m = m1 * m2 / (m1 + m2);

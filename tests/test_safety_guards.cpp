@@ -30,14 +30,17 @@ TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
   double m0 = 1e300, m1 = 1e300;
   for (int i = 0; i < h.size(); ++i) {
     const double m = 2000 * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
-    if (m < m0) m1 = m0, m0 = m;
-    else if (m < m1) m1 = m;
+    if (m < m0)
+      m1 = m0, m0 = m;
+    else if (m < m1)
+      m1 = m;
   }
   const double limit = 0.1 * model.normal.contact_duration(m0 * m1 / (m0 + m1));
   DemParams prm;
   prm.skin = 0.2;
   prm.dt = 0.99 * limit;
-  EXPECT_NO_THROW((DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(h), box, model, prm)));
+  EXPECT_NO_THROW(
+      (DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(h), box, model, prm)));
   prm.dt = 1.01 * limit;
   try {
     DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, model, prm);
@@ -72,7 +75,8 @@ TEST(SafetyGuards, GentleGasPassesTheHealthCheck) {
   const HostParticles h = small_gas(box, 0.001);
   DemParams prm;
   prm.skin = 0.2, prm.dt = 0.004;
-  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box, frictionless_linear(1e5, 1000), prm);
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
+                                          frictionless_linear(1e5, 1000), prm);
   sys.step(500);
   EXPECT_NO_THROW(sys.check_health(sys.measure()));
 }

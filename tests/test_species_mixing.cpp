@@ -17,7 +17,8 @@ TEST(SpeciesMixing, UnlikePairsTakeHarmonicMeanAndOverridesWin) {
   EXPECT_DOUBLE_EQ(t(1, 1).kn, 4e3);
   EXPECT_DOUBLE_EQ(t(0, 1).kn, 2 * 1e5 * 4e3 / (1e5 + 4e3));
   EXPECT_DOUBLE_EQ(t(1, 0).gn, 2 * 1000.0 * 10 / 1010);
-  std::vector<std::vector<std::optional<LinearNormal::Params>>> over(2, std::vector<std::optional<LinearNormal::Params>>(2));
+  std::vector<std::vector<std::optional<LinearNormal::Params>>> over(
+      2, std::vector<std::optional<LinearNormal::Params>>(2));
   over[1][0] = LinearNormal::Params{7e3, 5};
   const auto u = pair_table(sp, over);
   EXPECT_DOUBLE_EQ(u(0, 1).kn, 7e3);
@@ -25,7 +26,8 @@ TEST(SpeciesMixing, UnlikePairsTakeHarmonicMeanAndOverridesWin) {
   EXPECT_DOUBLE_EQ(u(0, 0).kn, 1e5);
   // Infinite friction stays infinite when both species have it.
   const double inf = std::numeric_limits<double>::infinity();
-  const auto c = pair_table(std::vector<CoulombTangential::Params>{{1, 0, inf, inf, 0}, {2, 0, inf, inf, 0}});
+  const auto c =
+      pair_table(std::vector<CoulombTangential::Params>{{1, 0, inf, inf, 0}, {2, 0, inf, inf, 0}});
   EXPECT_TRUE(std::isinf(c(0, 1).mu_s));
 }
 

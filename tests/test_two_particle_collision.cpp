@@ -48,6 +48,8 @@ TYPED_TEST(TwoParticleTest, UndampedCollisionEnergyErrorShrinksAsDtSquared) {
   EXPECT_NEAR(fine.restitution, 1.0, 1e-3);
   EXPECT_GT(coarse.max_energy_error, 1e-6);  // measurable at all
   const double ratio = coarse.max_energy_error / fine.max_energy_error;
-  EXPECT_GT(ratio, 3.4) << "coarse " << coarse.max_energy_error << " fine " << fine.max_energy_error;
-  EXPECT_LT(ratio, 4.6) << "coarse " << coarse.max_energy_error << " fine " << fine.max_energy_error;
+  EXPECT_GT(ratio, 3.4) << "coarse " << coarse.max_energy_error << " fine "
+                        << fine.max_energy_error;
+  EXPECT_LT(ratio, 4.6) << "coarse " << coarse.max_energy_error << " fine "
+                        << fine.max_energy_error;
 }
