@@ -1,0 +1,40 @@
+// The master equation d e/dt = Q e for normalized band energies (chain.md section 5):
+// fitting the transfer matrix Q from ensemble-averaged standing-wave runs by the two
+// procedures of the spec, and its forward solution by the matrix exponential.
+#pragma once
+#include <Eigen/Dense>
+#include <vector>
+
+namespace granular {
+
+// Ensemble-averaged normalized band energies of the runs that agitate one band each:
+// series[s] is B x T (band r, sample i) for the run that started in band s; times[i] is
+// the time of sample i (times[0] = 0).
+struct BandSeries {
+  std::vector<double> times;
+  std::vector<Eigen::MatrixXd> series;
+};
+
+struct FitWindow {
+  int first = 2, last = 18;  // sample indices, inclusive
+};
+
+// Procedure 1 (non-linear, longer window): decay (1 - y1) exp(-z1 t) + y1 gives
+// Q_ss = -z1 (1 - y1); rise y2 (1 - exp(-z2 t)) gives Q_rs = y2 z2.
+Eigen::MatrixXd fit_transfer_matrix_nonlinear(const BandSeries& data, FitWindow w);
+// Procedure 2 (linear, short window): 1 - x1 t gives Q_ss = -x1; x2 t gives Q_rs = x2
+// (least squares through the origin of the deviation from the initial state).
+Eigen::MatrixXd fit_transfer_matrix_linear(const BandSeries& data, FitWindow w);
+
+// e(t_i) = expm(Q t_i) e0 for every time.
+Eigen::MatrixXd solve_master_equation(const Eigen::MatrixXd& Q, const Eigen::VectorXd& e0,
+                                      const std::vector<double>& times);
+
+// Single-curve fits, exposed for tests: least-squares (y, z) of the model on (t, e).
+struct ExpFit {
+  double y = 0, z = 0, residual = 0;
+};
+ExpFit fit_decay(const std::vector<double>& t, const std::vector<double>& e);
+ExpFit fit_rise(const std::vector<double>& t, const std::vector<double>& e);
+
+}  // namespace granular

@@ -1,0 +1,227 @@
+// Batched chains against closed-form physics: the dispersion relation of the ordered chain,
+// the exact (eigenmode) solution of the linearized chain, second-order energy error of
+// velocity Verlet, the stability edge 2/omega_max, contact opening, reproducibility.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/chain_exact.hpp"
+#include "exec_spaces.hpp"
+#include "kernels/chain_energy.hpp"
+
+using namespace granular;
+
+namespace {
+
+ChainSpec spec_of(int n, ChainBoundary bc, ChainForce law, double xi, std::uint64_t seed = 7) {
+  ChainSpec s;
+  s.beads = n, s.boundary = bc, s.force = law, s.xi = xi, s.seed = seed;
+  return s;
+}
+
+template <class Space>
+std::vector<double> row(
+    const Kokkos::View<double**, Kokkos::LayoutRight, typename Space::memory_space>& f, int r) {
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), f);
+  return std::vector<double>(&h(r, 0), &h(r, 0) + f.extent(1));
+}
+
+template <class Space>
+ChainExactSolution exact_of(const ChainBatch<Space>& c, int r) {
+  return ChainExactSolution(row<Space>(c.b, r), row<Space>(c.klin, r),
+                            c.spec.boundary == ChainBoundary::Periodic);
+}
+
+Eigen::VectorXd vec(const std::vector<double>& x) {
+  return Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
+}
+
+}  // namespace
+
+TEST(ChainExact, OrderedRingEigenfrequenciesFollowTheDispersionRelation) {
+  const int n = 64;
+  std::vector<double> b(n, 1.0), k(n, 1.5);
+  ChainExactSolution ex(b, k, true);
+  std::vector<double> expect;
+  for (int m = 0; m < n; ++m)
+    expect.push_back(2 * std::sqrt(1.5) * std::abs(std::sin(M_PI * m / n)));
+  std::sort(expect.begin(), expect.end());
+  for (int m = 0; m < n; ++m) EXPECT_NEAR(ex.omega()(m), expect[m], 1e-12) << "mode " << m;
+}
+
+TEST(ChainExact, DisorderedModesAreMassOrthonormalAndEnergyIsConservedToRoundOff) {
+  ChainBatch<Kokkos::DefaultHostExecutionSpace> c(
+      spec_of(80, ChainBoundary::Fixed, ChainForce::Linear, 0.3), {3});
+  const auto ex = exact_of(c, 0);
+  const Eigen::MatrixXd& S = ex.modes();
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(80, 80);
+  EXPECT_LT((S.transpose() * ex.mass() * S - I).cwiseAbs().maxCoeff(), 1e-12);
+  // (-K) S = M S diag(w^2)
+  const Eigen::MatrixXd w2 = ex.omega().cwiseAbs2().asDiagonal();
+  EXPECT_LT((-ex.stiffness() * S - ex.mass() * S * w2).cwiseAbs().maxCoeff(), 1e-11);
+  ChainExactSolution moving = ex;
+  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(80), v0 = Eigen::VectorXd::Zero(80);
+  v0(0) = 0.01, u0(40) = 0.003;
+  moving.set_initial(u0, v0);
+  const double e0 = moving.energy(u0, v0);
+  for (double t : {1.0, 37.5, 1000.0}) {
+    Eigen::VectorXd u, v;
+    moving.state(t, u, v);
+    EXPECT_NEAR(moving.energy(u, v) / e0, 1.0, 1e-12) << "t = " << t;
+  }
+}
+
+template <class T>
+class ChainTest : public ::testing::Test {};
+TYPED_TEST_SUITE(ChainTest, granular::testing::ExecSpaces);
+
+// A standing tone of a periodic ordered ring is an exact mode; Verlet turns its frequency
+// w into w~ with sin(w~ dt/2) = w dt/2. Zero crossings of one bead give w~.
+TYPED_TEST(ChainTest, MeasuredToneFrequenciesMatchTheDispersionRelation) {
+  const int n = 64;
+  const double dt = 0.05;
+  for (int tone : {3, 11, 30}) {
+    ChainBatch<TypeParam> c(spec_of(n, ChainBoundary::Periodic, ChainForce::Linear, 0.0), {0});
+    chain_set_standing_waves(c, {tone}, 1, 1e-3);
+    chain_accelerations(c);
+    // A bead where sin(tone 2 pi x / n) is large.
+    int bead = 0;
+    for (int i = 0; i < n; ++i)
+      if (std::abs(std::sin(tone * 2 * M_PI * i / n)) >
+          std::abs(std::sin(tone * 2 * M_PI * bead / n)))
+        bead = i;
+    double prev = row<TypeParam>(c.u, 0)[bead], first = -1, last = -1;
+    int crossings = 0;
+    for (int s = 1; s <= 4000; ++s) {
+      chain_advance(c, dt, 1);
+      const double now = row<TypeParam>(c.u, 0)[bead];
+      if ((prev > 0) != (now > 0)) {
+        const double t = (s - 1 + prev / (prev - now)) * dt;
+        if (first < 0) first = t;
+        last = t, ++crossings;
+      }
+      prev = now;
+    }
+    const double w = 2 * std::sqrt(1.5) * std::abs(std::sin(M_PI * tone / n));
+    const double w_verlet = 2 / dt * std::asin(w * dt / 2);
+    const double measured = M_PI * (crossings - 1) / (last - first);
+    EXPECT_NEAR(measured / w_verlet, 1.0, 1e-6) << "tone " << tone;
+    EXPECT_GT(crossings, 10);
+  }
+}
+
+// Verlet's energy error and its trajectory error against the exact solution both fall by
+// 4 when dt halves (disordered chain, fixed walls, linearized forces).
+TYPED_TEST(ChainTest, VerletEnergyAndTrajectoryErrorsAreSecondOrderAgainstTheExactSolution) {
+  const double T = 40.0;
+  double energy_err[2], traj_err[2];
+  for (int k = 0; k < 2; ++k) {
+    const double dt = 0.1 / (1 << k);
+    ChainBatch<TypeParam> c(spec_of(48, ChainBoundary::Fixed, ChainForce::Linear, 0.2), {5});
+    chain_set_impulse(c, 0, 0.01);
+    chain_accelerations(c);
+    const auto e0 = chain_totals(c).linear[0];
+    double worst = 0;
+    const long steps = std::lround(T / dt);
+    for (long s = 0; s < steps; s += 10) {
+      chain_advance(c, dt, 10);
+      worst = std::max(worst, std::abs(chain_totals(c).linear[0] / e0 - 1));
+    }
+    energy_err[k] = worst;
+    auto ex = exact_of(c, 0);
+    Eigen::VectorXd u0 = Eigen::VectorXd::Zero(48), v0 = Eigen::VectorXd::Zero(48), u, v;
+    v0(0) = 0.01;
+    ex.set_initial(u0, v0);
+    ex.state(c.time, u, v);
+    traj_err[k] = (vec(row<TypeParam>(c.u, 0)) - u).norm() / u.norm();
+  }
+  EXPECT_NEAR(energy_err[0] / energy_err[1], 4.0, 0.4);
+  EXPECT_NEAR(traj_err[0] / traj_err[1], 4.0, 0.4);
+  EXPECT_LT(traj_err[1], 0.06);  // phase error of the fastest modes after t = 40
+}
+
+// The Hertz chain's own energy (exact Hertz potential) is also conserved to O(dt^2).
+TYPED_TEST(ChainTest, HertzChainEnergyErrorIsSecondOrder) {
+  double err[2];
+  for (int k = 0; k < 2; ++k) {
+    const double dt = 0.2 / (1 << k);
+    ChainBatch<TypeParam> c(spec_of(40, ChainBoundary::Periodic, ChainForce::Hertz, 0.1), {1});
+    chain_set_impulse(c, 3, 0.05);
+    chain_accelerations(c);
+    const auto e0 = chain_totals(c).hertz[0];
+    double worst = 0;
+    for (int s = 0; s < 30 * (1 << k); ++s) {
+      chain_advance(c, dt, 5);
+      worst = std::max(worst, std::abs(chain_totals(c).hertz[0] / e0 - 1));
+    }
+    err[k] = worst;
+  }
+  EXPECT_NEAR(err[0] / err[1], 4.0, 0.5);
+}
+
+// Ordered ring with an even bead count: the k = pi mode sits exactly at omega_max =
+// 2 sqrt(3/2). Just below 2/omega_max Verlet stays bounded, just above it the divergence
+// guard stops the run.
+TYPED_TEST(ChainTest, VerletIsBoundedBelowTheStabilityEdgeAndStoppedAboveIt) {
+  const double edge = 2.0 / (2.0 * std::sqrt(1.5));
+  auto run = [](double dt) {
+    ChainBatch<TypeParam> c(spec_of(32, ChainBoundary::Periodic, ChainForce::Linear, 0.0), {0});
+    chain_set_impulse(c, 0, 0.01);
+    chain_accelerations(c);
+    const auto e0 = chain_totals(c).linear;
+    const auto t = chain_advance_guarded(c, dt, 4000, e0);
+    return t.linear[0] / e0[0];
+  };
+  double ratio = 0;
+  EXPECT_NO_THROW(ratio = run(0.99 * edge));
+  EXPECT_LT(ratio, 100.0);
+  EXPECT_THROW(run(1.01 * edge), PhysicsError);
+}
+
+TYPED_TEST(ChainTest, OpeningContactStopsTheRun) {
+  ChainBatch<TypeParam> c(spec_of(16, ChainBoundary::Fixed, ChainForce::Hertz, 0.0), {0});
+  chain_set_impulse(c, 0, 2.0);  // far beyond the pre-compression: the contact behind opens
+  chain_accelerations(c);
+  EXPECT_THROW(chain_advance(c, 0.05, 200), PhysicsError);
+}
+
+// Realization r depends only on (seed, r): a batch of {0..5} and a batch of {4, 2} give
+// bitwise the same rows, on this space and on the serial (one-thread) space.
+TYPED_TEST(ChainTest, ResultsAreBitwiseIdenticalAcrossBatchSizesAndThreadCounts) {
+  const auto spec = spec_of(100, ChainBoundary::Fixed, ChainForce::Hertz, 0.3, 11);
+  ChainBatch<TypeParam> big(spec, ChainBatch<TypeParam>::first(6));
+  ChainBatch<TypeParam> small(spec, {4, 2});
+  auto go = [](auto& c) {
+    chain_set_impulse(c, 0, 0.01);
+    chain_accelerations(c);
+    chain_advance(c, 0.1, 500);
+  };
+  go(big), go(small);
+  EXPECT_EQ(row<TypeParam>(big.u, 4), row<TypeParam>(small.u, 0));
+  EXPECT_EQ(row<TypeParam>(big.v, 2), row<TypeParam>(small.v, 1));
+#ifdef KOKKOS_ENABLE_SERIAL
+  // Device compilers may contract to FMA differently from the host: compare host spaces.
+  if constexpr (Kokkos::SpaceAccessibility<Kokkos::HostSpace,
+                                           typename TypeParam::memory_space>::accessible) {
+    ChainBatch<Kokkos::Serial> serial(spec, {2});
+    go(serial);
+    EXPECT_EQ(row<TypeParam>(big.u, 2), row<Kokkos::Serial>(serial.u, 0));
+    EXPECT_EQ(chain_totals(big).linear[2], chain_totals(serial).linear[0]);
+  }
+#endif
+  EXPECT_NE(row<TypeParam>(big.u, 2), row<TypeParam>(big.u, 4));  // disorder differs
+}
+
+TEST(ChainDisorder, MassesHaveUnitMeanAndTheRequestedSpread) {
+  ChainSpec s = spec_of(20000, ChainBoundary::Fixed, ChainForce::Hertz, 0.1, 3);
+  const auto m = chain_masses(s, 9);
+  double mean = 0, var = 0;
+  for (double x : m) mean += x;
+  mean /= m.size();
+  for (double x : m) var += (x - mean) * (x - mean);
+  EXPECT_NEAR(mean, 1.0, 1e-14);
+  EXPECT_NEAR(std::sqrt(var / m.size()), 0.1, 0.003);  // 3 sigma of the sample sd
+  EXPECT_DOUBLE_EQ(chain_pair_kappa(StiffnessRule::Radius, 1, 1), 1.0);
+  EXPECT_DOUBLE_EQ(chain_pair_kappa(StiffnessRule::Mass, 1, 1), 1.0);
+  EXPECT_NE(chain_masses(s, 9), chain_masses(s, 10));
+}
