@@ -122,6 +122,12 @@ Eigen::MatrixXd fit_transfer_matrix_linear(const BandSeries& d, FitWindow w) {
   return Q;
 }
 
+Eigen::MatrixXd balance_columns(const Eigen::MatrixXd& Q) {
+  Eigen::MatrixXd out = Q;
+  for (Eigen::Index s = 0; s < Q.cols(); ++s) out(s, s) = Q(s, s) - Q.col(s).sum();
+  return out;
+}
+
 Eigen::MatrixXd solve_master_equation(const Eigen::MatrixXd& Q, const Eigen::VectorXd& e0,
                                       const std::vector<double>& times) {
   Eigen::MatrixXd out(Q.rows(), static_cast<Eigen::Index>(times.size()));

@@ -26,6 +26,11 @@ Eigen::MatrixXd fit_transfer_matrix_nonlinear(const BandSeries& data, FitWindow 
 // (least squares through the origin of the deviation from the initial state).
 Eigen::MatrixXd fit_transfer_matrix_linear(const BandSeries& data, FitWindow w);
 
+// Q with each diagonal entry replaced by minus the sum of its column's gains, so that
+// d/dt sum_r e_r = 0 exactly. Procedure 1 fits every entry independently and does not
+// conserve energy by itself; its forward predictions use this balanced form.
+Eigen::MatrixXd balance_columns(const Eigen::MatrixXd& Q);
+
 // e(t_i) = expm(Q t_i) e0 for every time.
 Eigen::MatrixXd solve_master_equation(const Eigen::MatrixXd& Q, const Eigen::VectorXd& e0,
                                       const std::vector<double>& times);

@@ -16,6 +16,11 @@ const std::vector<SceneEntry>& scene_registry() {
        "preparation protocol, unloading-branch configurations, elastic probing vs theory",
        run_elastic_moduli},
       // chain scenes
+      {"chain_impulse", "impulse on disordered granular chains: energy profile, spreading, localization",
+       run_chain_impulse},
+      {"chain_master_equation",
+       "band-energy transfer matrix Q of disordered chains and the master-equation prediction",
+       run_chain_master_equation},
   };
   return entries;
 }

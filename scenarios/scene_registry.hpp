@@ -31,5 +31,7 @@ void run_isotropic_compression(const SceneFile&, const RunOptions&);
 void run_hysteretic_collision(const SceneFile&, const RunOptions&);
 void run_elastic_moduli(const SceneFile&, const RunOptions&);
 // chain scenes
+void run_chain_impulse(const SceneFile&, const RunOptions&);
+void run_chain_master_equation(const SceneFile&, const RunOptions&);
 
 }  // namespace granular

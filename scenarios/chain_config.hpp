@@ -1,0 +1,38 @@
+// Scene keys shared by the chain scenes ([chain], [disorder], [time], [guard]) and the
+// summary.json skeleton every chain scene writes.
+#pragma once
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "core/output.hpp"
+#include "core/scene_file.hpp"
+#include "kernels/chain_batch.hpp"
+
+namespace granular {
+
+struct ChainScene {
+  ChainSpec spec;            // xi is set per ensemble from `xis`
+  std::vector<double> xis;   // disorder values, one ensemble each
+  int realizations = 0;      // ensemble size
+  double dt = 0;             // Verlet time step (units of t_c)
+  double sample_every = 0;   // time between samples
+  double energy_growth = 0;  // divergence guard factor
+};
+
+ChainScene read_chain_scene(const SceneFile& scene);
+
+// {"scene", "scene_file", "parameters": every key used}.
+Json chain_summary_header(const SceneFile& scene, const std::string& name);
+
+// Steps per sample interval; the interval must be a whole number of time steps.
+long chain_steps_per_sample(const SceneFile& scene, const ChainScene& c);
+
+struct WallClock {
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+};
+
+}  // namespace granular

@@ -1,0 +1,210 @@
+// Scene `chain_master_equation`: standing waves agitating one band each, ensembles per
+// disorder xi; the ensemble-averaged normalized band energies give the transfer matrix Q
+// of the master equation by both fitting procedures (chain.md section 5). A two-tone run
+// outside the fitting data checks the forward master-equation prediction against the full
+// ensemble, and times both.
+#include <Kokkos_Core.hpp>
+#include <cmath>
+#include <iostream>
+
+#include "core/master_equation.hpp"
+#include "core/progress.hpp"
+#include "kernels/chain_energy.hpp"
+#include "scenarios/chain_config.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+namespace {
+
+using Space = Kokkos::DefaultExecutionSpace;
+
+std::vector<double> flatten(const Eigen::MatrixXd& m) {  // row-major
+  std::vector<double> out;
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) out.push_back(m(i, j));
+  return out;
+}
+
+// Runs a batch whose rows start from the standing waves `tones` (tones_each per row, rows
+// grouped by experiment, `per_group` realizations each) and returns, per experiment, the
+// ensemble-mean normalized band energies (B x samples+1).
+struct EnsembleRun {
+  std::vector<double> times;
+  std::vector<Eigen::MatrixXd> bands;  // one per experiment
+  double max_imag = 0;
+  double seconds = 0;
+  long bead_steps = 0;
+};
+
+EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tones, int tones_each,
+                              int groups, double u0, long samples, long per_sample, int B,
+                              const std::string& label, bool progress_on) {
+  WallClock clock;
+  const int R = cs.realizations;
+  std::vector<std::uint64_t> ids;
+  for (int g = 0; g < groups; ++g)
+    for (int r = 0; r < R; ++r) ids.push_back(r);  // the same disorder for every experiment
+  ChainBatch<Space> c(cs.spec, ids);
+  chain_set_standing_waves(c, tones, tones_each, u0);
+  chain_accelerations(c);
+  const auto t0 = chain_totals(c);
+  const auto e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
+  const int L = cs.spec.sites();
+  ChainSpectrum spectrum(c.R, chain_lattice(cs.spec));
+  EnsembleRun out;
+  out.bands.assign(groups, Eigen::MatrixXd::Zero(B, samples + 1));
+  Progress progress(label, samples, progress_on);
+  for (long s = 0; s <= samples; ++s) {
+    if (s > 0) chain_advance_guarded(c, cs.dt, per_sample, e0, cs.energy_growth);
+    chain_spectrum(spectrum, c);
+    out.max_imag = std::max(out.max_imag, spectrum.max_imag());
+    const auto e = chain_band_energies(spectrum.bins(), c.R, L, B);
+    for (int row = 0; row < c.R; ++row) {
+      double total = 0;
+      for (int r = 0; r < B; ++r) total += e[row * B + r];
+      for (int r = 0; r < B; ++r) out.bands[row / R](r, s) += e[row * B + r] / total / R;
+    }
+    out.times.push_back(c.time);
+    if (s > 0) progress.update(s);
+  }
+  progress.finish();
+  out.seconds = clock.seconds();
+  out.bead_steps = static_cast<long>(c.R) * c.N * samples * per_sample;
+  return out;
+}
+
+}  // namespace
+
+void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
+  ChainScene cs = read_chain_scene(scene);
+  const int B = static_cast<int>(scene.integer("bands.count"));
+  const double u0 = scene.real("wave.u0", 0.01);
+  const long samples = scene.integer("time.samples");
+  const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
+  const auto w2 = scene.reals("fit.window_linear", {2, 8});
+  const auto check_bands = scene.reals("validation.bands");
+  const long check_samples = scene.integer("validation.samples", 2 * samples);
+  const int L = cs.spec.sites();
+  scene.require(cs.spec.boundary == ChainBoundary::Fixed || L % 2 == 0, "chain.beads",
+                "must be even for a periodic ring");
+  scene.require(B >= 2 && B <= L / 2, "bands.count",
+                "must be between 2 and L/2 = " + std::to_string(L / 2));
+  scene.require(u0 > 0 && u0 < 0.1, "wave.u0", "must be in (0, 0.1)");
+  scene.require(samples >= 3, "time.samples", "must be at least 3");
+  auto window = [&](const std::vector<double>& w, const char* key) {
+    scene.require(w.size() == 2 && w[0] >= 0 && w[1] > w[0] && w[1] <= samples, key,
+                  "must be [first, last] sample indices within time.samples");
+    return FitWindow{static_cast<int>(w[0]), static_cast<int>(w[1])};
+  };
+  const FitWindow fw1 = window(w1, "fit.window_nonlinear"), fw2 = window(w2, "fit.window_linear");
+  scene.require(check_bands.size() == 2 && check_bands[0] >= 0 && check_bands[1] >= 0 &&
+                    check_bands[0] < B && check_bands[1] < B && check_bands[0] != check_bands[1],
+                "validation.bands", "must be two different band indices in [0, bands.count)");
+  scene.require(check_samples >= 1, "validation.samples", "must be positive");
+  const long per_sample = chain_steps_per_sample(scene, cs);
+  scene.reject_unknown_keys();
+  const int R = cs.realizations;
+
+  make_directories(opts.out_dir);
+  H5Writer h5(opts.out_dir + "/results.h5");
+  Json summary = chain_summary_header(scene, "chain_master_equation");
+  Json runs = Json::array();
+  WallClock total_clock;
+  std::vector<int> band_tones;
+  for (int s = 0; s < B; ++s) band_tones.push_back(chain_band_tone(s, L, B));
+  for (size_t k = 0; k < cs.xis.size(); ++k) {
+    cs.spec.xi = cs.xis[k];
+    // One experiment per band: R realizations of the chain start from that band's tone.
+    std::vector<int> tones;
+    for (int s = 0; s < B; ++s) tones.insert(tones.end(), R, band_tones[s]);
+    const auto fit_run = run_band_ensemble(cs, tones, 1, B, u0, samples, per_sample, B,
+                                           "Q fit xi=" + std::to_string(cs.spec.xi), opts.progress);
+    BandSeries data{fit_run.times, fit_run.bands};
+    const Eigen::MatrixXd Q1 = fit_transfer_matrix_nonlinear(data, fw1);
+    const Eigen::MatrixXd Q2 = fit_transfer_matrix_linear(data, fw2);
+    // Validation: two tones together, a state none of the fits saw, run for longer.
+    const int b1 = static_cast<int>(check_bands[0]), b2 = static_cast<int>(check_bands[1]);
+    std::vector<int> pair;
+    for (int r = 0; r < R; ++r) pair.push_back(band_tones[b1]), pair.push_back(band_tones[b2]);
+    const auto check =
+        run_band_ensemble(cs, pair, 2, 1, u0, check_samples, per_sample, B,
+                          "validation xi=" + std::to_string(cs.spec.xi), opts.progress);
+    const Eigen::MatrixXd& sim = check.bands[0];
+    WallClock me_clock;
+    const Eigen::MatrixXd pred1 =
+        solve_master_equation(balance_columns(Q1), sim.col(0), check.times);
+    const Eigen::MatrixXd pred2 = solve_master_equation(Q2, sim.col(0), check.times);
+    const double me_seconds = me_clock.seconds() / 2;
+    auto band_error = [&](const Eigen::MatrixXd& pred, int b) {
+      return (pred.row(b) - sim.row(b)).cwiseAbs().maxCoeff();
+    };
+    const std::string g = "/xi_" + std::to_string(k);
+    const auto BB = static_cast<hsize_t>(B);
+    h5.write(g + "/times", fit_run.times);
+    std::vector<double> series;
+    for (const auto& m : fit_run.bands) {
+      const auto f = flatten(m);
+      series.insert(series.end(), f.begin(), f.end());
+    }
+    h5.write(g + "/band_series", series, {BB, BB, static_cast<hsize_t>(samples + 1)});
+    h5.write(g + "/Q_nonlinear", flatten(Q1), {BB, BB});
+    h5.write(g + "/Q_linear", flatten(Q2), {BB, BB});
+    h5.write(g + "/validation/times", check.times);
+    const hsize_t T = check.times.size();
+    h5.write(g + "/validation/simulated", flatten(sim), {BB, T});
+    // Procedure 1 predictions use the balanced Q (see balance_columns).
+    h5.write(g + "/validation/predicted_nonlinear", flatten(pred1), {BB, T});
+    h5.write(g + "/validation/predicted_linear", flatten(pred2), {BB, T});
+    h5.attribute(g, "xi", cs.spec.xi);
+    h5.attribute(g + "/validation", "band_1", b1);
+    h5.attribute(g + "/validation", "band_2", b2);
+    Json run = Json::object();
+    run["xi"] = cs.spec.xi;
+    std::vector<double> d1, d2, cs1, cs2;
+    for (int s = 0; s < B; ++s) {
+      d1.push_back(Q1(s, s)), d2.push_back(Q2(s, s));
+      cs1.push_back(Q1.col(s).sum()), cs2.push_back(Q2.col(s).sum());
+    }
+    run["diag_Q_nonlinear"] = d1;
+    run["diag_Q_linear"] = d2;
+    run["column_sums_nonlinear"] = cs1;
+    run["column_sums_linear"] = cs2;
+    run["max_imaginary_part_relative"] = std::max(fit_run.max_imag, check.max_imag);
+    Json val = Json::object();
+    val["bands"] = std::vector<double>{double(b1), double(b2)};
+    val["max_abs_error_nonlinear"] =
+        std::vector<double>{band_error(pred1, b1), band_error(pred1, b2)};
+    val["max_abs_error_linear"] = std::vector<double>{band_error(pred2, b1), band_error(pred2, b2)};
+    // Over the fitted horizon only (the Markovian model is fitted up to the window's end).
+    const long horizon = std::min<long>(std::max(fw1.last, fw2.last), check.times.size() - 1);
+    val["max_abs_error_within_fit_horizon_nonlinear"] =
+        (pred1 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+    val["max_abs_error_within_fit_horizon_linear"] =
+        (pred2 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+    val["max_abs_error_all_bands_nonlinear"] = (pred1 - sim).cwiseAbs().maxCoeff();
+    val["max_abs_error_all_bands_linear"] = (pred2 - sim).cwiseAbs().maxCoeff();
+    val["ensemble_seconds"] = check.seconds;
+    val["master_equation_seconds"] = me_seconds;
+    val["speedup"] = check.seconds / std::max(me_seconds, 1e-9);
+    run["validation"] = val;
+    run["fit_ensemble_seconds"] = fit_run.seconds;
+    run["bead_steps_per_second"] = double(fit_run.bead_steps) / fit_run.seconds;
+    runs.push(run);
+    std::cout << "xi = " << cs.spec.xi << ": Q_ss(band 0) = " << Q1(0, 0) << " / " << Q2(0, 0)
+              << ", Q_ss(band " << B - 1 << ") = " << Q1(B - 1, B - 1) << " / " << Q2(B - 1, B - 1)
+              << "; prediction error bands " << b1 << "," << b2 << ": procedure 1 "
+              << band_error(pred1, b1) << ", " << band_error(pred1, b2) << ", procedure 2 "
+              << band_error(pred2, b1) << ", " << band_error(pred2, b2) << " (ensemble "
+              << check.seconds << " s, master equation " << me_seconds << " s)\n";
+  }
+  h5.attribute("/", "bands", B);
+  h5.commit();
+  summary["runs"] = runs;
+  summary["wall_seconds"] = total_clock.seconds();
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  if (opts.charts)
+    run_plot_script("chain_master_equation.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular
