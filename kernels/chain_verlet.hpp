@@ -35,20 +35,55 @@ int chain_team_size(int beads) {
   return beads < 128 ? 32 : 128;
 }
 
-// All contact forces of realization r from u (one team).
+// All contact forces of realization r from u (one team). The two end contacts (walls or
+// the ring's closing contact) are peeled off so the interior loop has no branches and
+// vectorizes.
 template <ChainForce Law, class Member, class Field, class Flags>
 KOKKOS_INLINE_FUNCTION void chain_contact_pass(const Member& team, int r, int N, int C,
                                                bool periodic, const Field& u, const Field& kappa,
                                                const Field& delta0, const Field& klin,
                                                const Field& force, const Flags& opened) {
-  Kokkos::parallel_for(Kokkos::TeamThreadRange(team, C), [&](const int c) {
-    const double ul = c == 0 ? (periodic ? u(r, N - 1) : 0.0) : u(r, c - 1);
-    const double ur = c == N ? 0.0 : u(r, c);
+  int open = 0;
+  Kokkos::parallel_reduce(
+      Kokkos::TeamThreadRange(team, 1, N),
+      [&](const int c, int& o) {
+        double overlap;
+        force(r, c) = ChainContactForce<Law>::eval(kappa(r, c), delta0(r, c), klin(r, c),
+                                                   u(r, c - 1) - u(r, c), overlap);
+        o += overlap > 0.0 ? 0 : 1;  // also counts NaN
+      },
+      open);
+  Kokkos::single(Kokkos::PerTeam(team), [&]() {
     double overlap;
-    force(r, c) =
-        ChainContactForce<Law>::eval(kappa(r, c), delta0(r, c), klin(r, c), ul - ur, overlap);
-    if (!(overlap > 0.0)) opened(r) = 1;  // also catches NaN
+    force(r, 0) = ChainContactForce<Law>::eval(kappa(r, 0), delta0(r, 0), klin(r, 0),
+                                               (periodic ? u(r, N - 1) : 0.0) - u(r, 0), overlap);
+    int o = overlap > 0.0 ? 0 : 1;
+    if (C > N) {
+      force(r, N) =
+          ChainContactForce<Law>::eval(kappa(r, N), delta0(r, N), klin(r, N), u(r, N - 1), overlap);
+      o += overlap > 0.0 ? 0 : 1;
+    }
+    if (o + open > 0) opened(r) = 1;
   });
+  team.team_barrier();
+}
+
+// a_i from the contact forces, then v += kick a, u += drift v. Bead N-1 of a ring takes
+// its right force from contact 0; every other bead from contact i + 1.
+template <class Member, class Field>
+KOKKOS_INLINE_FUNCTION void chain_kick_drift_pass(const Member& team, int r, int N, int C,
+                                                  double kick, double drift, const Field& u,
+                                                  const Field& v, const Field& a, const Field& b,
+                                                  const Field& force) {
+  auto update = [&](const int i, const double f_right) {
+    const double acc = (force(r, i) - f_right) / b(r, i);
+    a(r, i) = acc;
+    v(r, i) += kick * acc;
+    u(r, i) += drift * v(r, i);
+  };
+  Kokkos::parallel_for(Kokkos::TeamThreadRange(team, 0, N - 1),
+                       [&](const int i) { update(i, force(r, i + 1)); });
+  Kokkos::single(Kokkos::PerTeam(team), [&]() { update(N - 1, force(r, N == C ? 0 : N)); });
   team.team_barrier();
 }
 
@@ -77,14 +112,7 @@ void chain_advance_law(ChainBatch<Space>& c, double dt, long steps) {
           // u, v and a are synchronized whenever control returns to the host.
           const double kick = s < steps ? dt : h;
           const double drift = s < steps ? dt : 0.0;
-          Kokkos::parallel_for(Kokkos::TeamThreadRange(team, N), [&](const int i) {
-            const int right = i + 1 == C ? 0 : i + 1;
-            const double acc = (force(r, i) - force(r, right)) / b(r, i);
-            a(r, i) = acc;
-            v(r, i) += kick * acc;
-            u(r, i) += drift * v(r, i);
-          });
-          team.team_barrier();
+          chain_kick_drift_pass(team, r, N, C, kick, drift, u, v, a, b, force);
         }
       });
 }
@@ -94,7 +122,7 @@ template <ChainForce Law, class Space>
 void chain_accelerations_law(ChainBatch<Space>& c) {
   const int N = c.N, C = c.C;
   const bool periodic = c.spec.boundary == ChainBoundary::Periodic;
-  auto u = c.u, a = c.a, b = c.b, kappa = c.kappa, delta0 = c.delta0, klin = c.klin,
+  auto u = c.u, v = c.v, a = c.a, b = c.b, kappa = c.kappa, delta0 = c.delta0, klin = c.klin,
        force = c.force;
   auto opened = c.opened;
   using Policy = Kokkos::TeamPolicy<Space>;
@@ -104,10 +132,7 @@ void chain_accelerations_law(ChainBatch<Space>& c) {
       KOKKOS_LAMBDA(const Member& team) {
         const int r = team.league_rank();
         chain_contact_pass<Law>(team, r, N, C, periodic, u, kappa, delta0, klin, force, opened);
-        Kokkos::parallel_for(Kokkos::TeamThreadRange(team, N), [&](const int i) {
-          const int right = i + 1 == C ? 0 : i + 1;
-          a(r, i) = (force(r, i) - force(r, right)) / b(r, i);
-        });
+        chain_kick_drift_pass(team, r, N, C, 0.0, 0.0, u, v, a, b, force);  // a only
       });
 }
 
