@@ -8,6 +8,7 @@
 #include "core/chain_exact.hpp"
 #include "exec_spaces.hpp"
 #include "kernels/chain_energy.hpp"
+#include "scenarios/chain_config.hpp"
 
 using namespace granular;
 
@@ -224,4 +225,19 @@ TEST(ChainDisorder, MassesHaveUnitMeanAndTheRequestedSpread) {
   EXPECT_DOUBLE_EQ(chain_pair_kappa(StiffnessRule::Radius, 1, 1), 1.0);
   EXPECT_DOUBLE_EQ(chain_pair_kappa(StiffnessRule::Mass, 1, 1), 1.0);
   EXPECT_NE(chain_masses(s, 9), chain_masses(s, 10));
+}
+
+TEST(ChainScene, TimeStepBeyondTheStabilityLimitIsRefusedNamingTheKeyAndFile) {
+  const std::string text =
+      "scene = \"chain_impulse\"\n[chain]\nbeads = 64\n[disorder]\nxi = [0.1]\n"
+      "realizations = 4\n[time]\ndt = 0.9\nsample_every = 1.8\n";
+  try {
+    read_chain_scene(SceneFile::parse(text, "bad_chain.toml"));
+    FAIL() << "dt = 0.9 > 2/omega_max was accepted";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("time.dt"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("bad_chain.toml"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("stability"), std::string::npos) << msg;
+  }
 }
