@@ -36,6 +36,8 @@ DisorderTarget parse_disorder_target(const std::string& s) {
 
 std::vector<double> chain_masses(const ChainSpec& spec, std::uint64_t realization) {
   if (spec.xi < 0) throw InputError("disorder xi must not be negative");
+  if (spec.min_mass < 0 || spec.min_mass >= 1)
+    throw InputError("minimum mass must be in [0, 1) (the mean mass is 1)");
   std::vector<double> m(spec.beads, 1.0);
   if (spec.xi == 0.0) return m;  // ordered chain: exactly 1, no rescaling round-off
   Stream rng(spec.seed, realization);
@@ -43,7 +45,7 @@ std::vector<double> chain_masses(const ChainSpec& spec, std::uint64_t realizatio
   for (double& x : m) {
     do {
       x = 1.0 + spec.xi * rng.normal();
-    } while (x <= 0.0);
+    } while (x <= spec.min_mass);
     sum += x;
   }
   const double scale = spec.beads / sum;

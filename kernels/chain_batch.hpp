@@ -39,6 +39,9 @@ struct ChainSpec {
   StiffnessRule rule = StiffnessRule::Radius;
   DisorderTarget target = DisorderTarget::MassAndStiffness;
   double xi = 0.0;  // standard deviation of the mass distribution (mean 1)
+  // Draws at or below this are rejected (0: only non-positive masses, as in chain.md). A
+  // floor keeps near-weightless beads, whose frequency sqrt(k/b) diverges, out of the chain.
+  double min_mass = 0.0;
   std::uint64_t seed = 1;
 
   int contacts() const { return boundary == ChainBoundary::Fixed ? beads + 1 : beads; }
@@ -49,7 +52,7 @@ struct ChainSpec {
   int site(int bead) const { return boundary == ChainBoundary::Fixed ? bead + 1 : bead; }
 };
 
-// Masses of one realization: normal(1, xi), non-positive draws rejected, rescaled so the
+// Masses of one realization: normal(1, xi), draws <= min_mass rejected, rescaled so the
 // sample mean is exactly 1. A pure function of (seed, realization index).
 std::vector<double> chain_masses(const ChainSpec& spec, std::uint64_t realization);
 

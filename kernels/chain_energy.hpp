@@ -128,6 +128,69 @@ double chain_omega_max_bound(const ChainBatch<Space>& c) {
   return std::sqrt(w2);
 }
 
+// Verlet stability limit 2/omega_max of each realization. Fixed walls: omega_max^2 is the
+// largest eigenvalue of the symmetric tridiagonal M^{-1/2}(-K)M^{-1/2}, found by bisection
+// on its Sturm sequence (exact to round-off, O(N) per iteration). A ring's closing contact
+// breaks the tridiagonal form; there Gershgorin's bound is used (a safe underestimate).
+template <class Space>
+std::vector<double> chain_stability_limits(const ChainBatch<Space>& c) {
+  auto hb = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), c.b);
+  auto hk = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), c.klin);
+  std::vector<double> limits(c.R);
+  const int N = c.N;
+  for (int r = 0; r < c.R; ++r) {
+    double gersh = 0;
+    for (int i = 0; i < N; ++i) {
+      const int right = i + 1 == c.C ? 0 : i + 1;
+      gersh = std::max(gersh, 2.0 * (hk(r, i) + hk(r, right)) / hb(r, i));
+    }
+    double w2 = gersh;
+    if (c.spec.boundary == ChainBoundary::Fixed) {
+      auto count_below = [&](double x) {  // eigenvalues < x
+        int neg = 0;
+        double q = 1.0;
+        for (int i = 0; i < N; ++i) {
+          const double d = (hk(r, i) + hk(r, i + 1)) / hb(r, i);
+          const double e2 = i == 0 ? 0.0 : hk(r, i) * hk(r, i) / (hb(r, i - 1) * hb(r, i));
+          q = d - x - (i == 0 ? 0.0 : e2 / q);
+          if (q == 0.0) q = -1e-300;
+          if (q < 0) ++neg;
+        }
+        return neg;
+      };
+      double lo = 0.0, hi = gersh * (1 + 1e-12);
+      for (int it = 0; it < 200 && hi - lo > 1e-15 * hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (count_below(mid) < N ? lo : hi) = mid;
+      }
+      w2 = hi;
+    }
+    limits[r] = 2.0 / std::sqrt(w2);
+  }
+  return limits;
+}
+
+// Refuses a time step at or beyond the stability limit of any realization, naming it and
+// its lightest bead, before any step is taken.
+template <class Space>
+void chain_check_time_step(const ChainBatch<Space>& c, double dt) {
+  const auto limits = chain_stability_limits(c);
+  const int worst =
+      static_cast<int>(std::min_element(limits.begin(), limits.end()) - limits.begin());
+  if (dt < limits[worst]) return;
+  auto hb = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), c.b);
+  double lightest = hb(worst, 0);
+  for (int i = 0; i < c.N; ++i) lightest = std::min(lightest, hb(worst, i));
+  std::ostringstream msg;
+  msg << "time step dt = " << dt
+      << " is beyond the Verlet stability limit 2/omega_max = " << limits[worst]
+      << " of chain realization " << c.realization[worst] << " (xi = " << c.spec.xi
+      << ", lightest bead b = " << lightest << "): light beads vibrate fast. Use dt below "
+      << limits[worst]
+      << ", or keep near-weightless beads out with a mass floor (disorder.min_mass).";
+  throw PhysicsError(msg.str());
+}
+
 // Divergence guard: stops the run when any realization's conserved energy is NaN or has
 // grown by more than `growth` over its initial value. Bounded Verlet runs near the edge of
 // stability show energy oscillations of up to ~1/(1 - (w dt/2)^2); an unstable step

@@ -14,6 +14,9 @@ ChainScene read_chain_scene(const SceneFile& scene) {
   c.spec.seed = static_cast<std::uint64_t>(scene.integer("disorder.seed", 1));
   c.xis = scene.reals("disorder.xi");
   c.realizations = static_cast<int>(scene.integer("disorder.realizations"));
+  c.spec.min_mass = scene.real("disorder.min_mass", 0.0);
+  scene.require(c.spec.min_mass >= 0 && c.spec.min_mass < 1, "disorder.min_mass",
+                "must be in [0, 1) (the mean mass is 1)");
   c.dt = scene.real("time.dt");
   c.sample_every = scene.real("time.sample_every");
   c.energy_growth = scene.real("guard.energy_growth", 1e4);

@@ -57,6 +57,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     WallClock clock;
     ChainBatch<Space> c(cs.spec, ChainBatch<Space>::first(cs.realizations));
     chain_set_impulse(c, source, v0);
+    chain_check_time_step(c, cs.dt);
     chain_accelerations(c);
     const auto t0 = chain_totals(c);
     const auto& e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;

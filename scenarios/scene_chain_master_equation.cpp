@@ -47,7 +47,8 @@ EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tone
     for (int r = 0; r < R; ++r) ids.push_back(r);  // the same disorder for every experiment
   ChainBatch<Space> c(cs.spec, ids);
   chain_set_standing_waves(c, tones, tones_each, u0);
-  chain_accelerations(c);
+  chain_check_time_step(c, cs.dt);
+    chain_accelerations(c);
   const auto t0 = chain_totals(c);
   const auto e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
   const int L = cs.spec.sites();

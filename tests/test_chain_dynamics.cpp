@@ -241,3 +241,20 @@ TEST(ChainScene, TimeStepBeyondTheStabilityLimitIsRefusedNamingTheKeyAndFile) {
     EXPECT_NE(msg.find("stability"), std::string::npos) << msg;
   }
 }
+
+// The stability limit 2/omega_max from the Sturm bisection against the closed form of the
+// ordered chain with walls and against the eigensolver for a disordered chain; a time step
+// at the limit is refused before any step.
+TEST(ChainStability, SturmLimitMatchesTheEigenvaluesAndRefusesLargerSteps) {
+  using Host = Kokkos::DefaultHostExecutionSpace;
+  ChainBatch<Host> ordered(spec_of(40, ChainBoundary::Fixed, ChainForce::Linear, 0.0), {0});
+  const double w_max = 2 * std::sqrt(1.5) * std::sin(M_PI * 40 / (2.0 * 41));
+  EXPECT_NEAR(chain_stability_limits(ordered)[0], 2 / w_max, 1e-12);
+  ChainBatch<Host> c(spec_of(60, ChainBoundary::Fixed, ChainForce::Hertz, 0.3), {0, 1, 2});
+  const auto limits = chain_stability_limits(c);
+  for (int r = 0; r < 3; ++r)
+    EXPECT_NEAR(limits[r], 2 / exact_of(c, r).omega().maxCoeff(), 1e-10 * limits[r]);
+  const double lowest = *std::min_element(limits.begin(), limits.end());
+  EXPECT_NO_THROW(chain_check_time_step(c, 0.999 * lowest));
+  EXPECT_THROW(chain_check_time_step(c, lowest), PhysicsError);
+}
