@@ -87,8 +87,10 @@ KOKKOS_INLINE_FUNCTION void chain_kick_drift_pass(const Member& team, int r, int
   team.team_barrier();
 }
 
+// `steps` Verlet steps of every realization in one kernel; steps = 0 only computes the
+// accelerations of the current displacements (after setting initial conditions).
 template <ChainForce Law, class Space>
-void chain_advance_law(ChainBatch<Space>& c, double dt, long steps) {
+void chain_sweep(ChainBatch<Space>& c, double dt, long steps) {
   const int N = c.N, C = c.C;
   const bool periodic = c.spec.boundary == ChainBoundary::Periodic;
   auto u = c.u, v = c.v, a = c.a, b = c.b, kappa = c.kappa, delta0 = c.delta0, klin = c.klin,
@@ -100,6 +102,11 @@ void chain_advance_law(ChainBatch<Space>& c, double dt, long steps) {
   Kokkos::parallel_for(
       "chain::verlet", Policy(c.R, chain_team_size<Space>(N)), KOKKOS_LAMBDA(const Member& team) {
         const int r = team.league_rank();
+        if (steps == 0) {
+          chain_contact_pass<Law>(team, r, N, C, periodic, u, kappa, delta0, klin, force, opened);
+          chain_kick_drift_pass(team, r, N, C, 0.0, 0.0, u, v, a, b, force);  // a only
+          return;
+        }
         // Half kick and drift: v(t + dt/2), u(t + dt).
         Kokkos::parallel_for(Kokkos::TeamThreadRange(team, N), [&](const int i) {
           v(r, i) += h * a(r, i);
@@ -114,25 +121,6 @@ void chain_advance_law(ChainBatch<Space>& c, double dt, long steps) {
           const double drift = s < steps ? dt : 0.0;
           chain_kick_drift_pass(team, r, N, C, kick, drift, u, v, a, b, force);
         }
-      });
-}
-
-// Accelerations from the current displacements (call once after setting initial conditions).
-template <ChainForce Law, class Space>
-void chain_accelerations_law(ChainBatch<Space>& c) {
-  const int N = c.N, C = c.C;
-  const bool periodic = c.spec.boundary == ChainBoundary::Periodic;
-  auto u = c.u, v = c.v, a = c.a, b = c.b, kappa = c.kappa, delta0 = c.delta0, klin = c.klin,
-       force = c.force;
-  auto opened = c.opened;
-  using Policy = Kokkos::TeamPolicy<Space>;
-  using Member = typename Policy::member_type;
-  Kokkos::parallel_for(
-      "chain::accelerations", Policy(c.R, chain_team_size<Space>(N)),
-      KOKKOS_LAMBDA(const Member& team) {
-        const int r = team.league_rank();
-        chain_contact_pass<Law>(team, r, N, C, periodic, u, kappa, delta0, klin, force, opened);
-        chain_kick_drift_pass(team, r, N, C, 0.0, 0.0, u, v, a, b, force);  // a only
       });
 }
 
@@ -155,9 +143,9 @@ void chain_check_contacts(ChainBatch<Space>& c, double t_from) {
 template <class Space>
 void chain_accelerations(ChainBatch<Space>& c) {
   if (c.spec.force == ChainForce::Hertz)
-    chain_accelerations_law<ChainForce::Hertz>(c);
+    chain_sweep<ChainForce::Hertz>(c, 0.0, 0);
   else
-    chain_accelerations_law<ChainForce::Linear>(c);
+    chain_sweep<ChainForce::Linear>(c, 0.0, 0);
   chain_check_contacts(c, c.time);
 }
 
@@ -168,9 +156,9 @@ void chain_advance(ChainBatch<Space>& c, double dt, long steps) {
   if (steps <= 0) return;
   const double t0 = c.time;
   if (c.spec.force == ChainForce::Hertz)
-    chain_advance_law<ChainForce::Hertz>(c, dt, steps);
+    chain_sweep<ChainForce::Hertz>(c, dt, steps);
   else
-    chain_advance_law<ChainForce::Linear>(c, dt, steps);
+    chain_sweep<ChainForce::Linear>(c, dt, steps);
   c.time = t0 + dt * static_cast<double>(steps);
   chain_check_contacts(c, t0);
 }
