@@ -22,7 +22,7 @@
 # Options: --sizes "N1 N2 ..."  --big  --reps R  --steps S (timed, 2000)  --warmup W (500)
 #          --models "hooke_abs hooke_mass frictionless_abs frictionless_mass"
 #          --physics "friction frictionless"  --threads "1 2"  --ranks "1 2"
-#          --no-install  --no-build
+#          --no-install  --no-build  --results DIR (default perf/results)
 # Environment: GEN_NP (ranks for making a packing, default 1; another count gives another,
 # equally valid packing).
 set -euo pipefail
@@ -39,6 +39,7 @@ threads="1 2"
 ranks="1 2"
 install=1
 build=1
+results=$repo/perf/results
 while [ $# -gt 0 ]; do
   case $1 in
     --sizes) sizes=$2; shift ;;
@@ -52,6 +53,7 @@ while [ $# -gt 0 ]; do
     --ranks) ranks=$2; shift ;;
     --no-install) install=0 ;;
     --no-build) build=0 ;;
+    --results) results=$2; shift ;;
     -h | --help) sed -n '2,30p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
@@ -134,7 +136,7 @@ run_lammps() {  # model n ranks rep
     OMP_NUM_THREADS=1 "${mpirun_cmd[@]}" "$3" /usr/bin/time -f "$timefmt" lmp "${args[@]}" \
       > "$out" 2>&1 || say "FAILED: $out"
   fi
-  say "$(date -u +%T) lammps $1 N=$2 ranks=$3 rep=$4: $(grep -A3 PEER_TIMED_BEGIN "$out" | grep -m1 -o 'Loop time of [0-9.e+-]*' || echo '?')"
+  say "$(date -u +%T) lammps $1 N=$2 ranks=$3 rep=$4: $(grep -A40 PEER_TIMED_BEGIN "$out" | grep -m1 -o 'Loop time of [0-9.e+-]*' || echo '?')"
 }
 run_triad() {  # threads rep
   local out=$logs/triad_t$1_r$2
@@ -153,4 +155,4 @@ for rep in $(seq 1 "$reps"); do
 done
 
 # ---- 5. results ----------------------------------------------------------------------------
-/usr/bin/python3 "$peer/summarize.py" "$logs" --results "$repo/perf/results"
+/usr/bin/python3 "$peer/summarize.py" "$logs" --results "$results"
