@@ -23,6 +23,9 @@
 #          --models "hooke_abs hooke_mass frictionless_abs frictionless_mass"
 #          --physics "friction frictionless"  --threads "1 2"  --ranks "1 2"
 #          --no-install  --no-build  --results DIR (default perf/results)
+#          --nice LEVEL   run every timed process (both codes alike) at this nice level; a
+#                         negative level (root) shields the timings from other work on a
+#                         shared machine
 # Environment: GEN_NP (ranks for making a packing, default 1; another count gives another,
 # equally valid packing).
 set -euo pipefail
@@ -40,6 +43,7 @@ ranks="1 2"
 install=1
 build=1
 results=$repo/perf/results
+nice_level=0
 while [ $# -gt 0 ]; do
   case $1 in
     --sizes) sizes=$2; shift ;;
@@ -54,6 +58,7 @@ while [ $# -gt 0 ]; do
     --no-install) install=0 ;;
     --no-build) build=0 ;;
     --results) results=$2; shift ;;
+    --nice) nice_level=$2; shift ;;
     -h | --help) sed -n '2,30p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
@@ -110,9 +115,10 @@ say "logs in $logs"
 export OMP_PROC_BIND=spread OMP_PLACES=cores
 mpirun_cmd=(mpirun --allow-run-as-root --bind-to core -np)
 timefmt="PEER_RSS_KB %M PEER_WALL_S %e"
+prio=(nice -n "$nice_level")
 {
   echo "sizes=$sizes"; echo "reps=$reps"; echo "steps=$steps"; echo "warmup=$warmup"
-  echo "models=$models"; echo "physics=$physics"; echo "threads=$threads"; echo "ranks=$ranks"
+  echo "models=$models"; echo "physics=$physics"; echo "threads=$threads"; echo "ranks=$ranks"; echo "nice=$nice_level"
   echo "lammps_version=$(dpkg-query -W -f='${Version}' lammps 2>/dev/null || echo unknown)"
   echo "mpirun_version=$(mpirun --version 2>/dev/null | head -n1)"
   echo "git_commit=$(git -C "$repo" rev-parse --short HEAD 2>/dev/null || echo unknown)"
@@ -121,7 +127,7 @@ timefmt="PEER_RSS_KB %M PEER_WALL_S %e"
 
 run_engine() {  # physics n threads rep
   local out=$logs/engine_$1_N$2_t$3_r$4
-  OMP_NUM_THREADS=$3 /usr/bin/time -f "$timefmt" "$bench" --kokkos-threads="$3" --no-triad \
+  OMP_NUM_THREADS=$3 "${prio[@]}" /usr/bin/time -f "$timefmt" "$bench" --kokkos-threads="$3" --no-triad \
     --data "$peer/data/packing_$2.data" --physics "$1" --reps 1 --steps "$steps" \
     --warmup "$warmup" --out "$out.json" > "$out.log" 2>&1 || say "FAILED: $out.log"
   say "$(date -u +%T) engine $1 N=$2 threads=$3 rep=$4: $(grep -m1 -o 'median [0-9.e+-]* M' "$out.log" || echo '?')"
@@ -131,9 +137,9 @@ run_lammps() {  # model n ranks rep
   local args=(-in "$peer/bench.lmp" -var data "$peer/data/packing_$2.data" -var model "$1"
     -var nrun "$steps" -var nwarm "$warmup" -log none -echo none)
   if [ "$3" = 1 ]; then
-    OMP_NUM_THREADS=1 /usr/bin/time -f "$timefmt" lmp "${args[@]}" > "$out" 2>&1 || say "FAILED: $out"
+    OMP_NUM_THREADS=1 "${prio[@]}" /usr/bin/time -f "$timefmt" lmp "${args[@]}" > "$out" 2>&1 || say "FAILED: $out"
   else
-    OMP_NUM_THREADS=1 "${mpirun_cmd[@]}" "$3" /usr/bin/time -f "$timefmt" lmp "${args[@]}" \
+    OMP_NUM_THREADS=1 "${prio[@]}" "${mpirun_cmd[@]}" "$3" /usr/bin/time -f "$timefmt" lmp "${args[@]}" \
       > "$out" 2>&1 || say "FAILED: $out"
   fi
   say "$(date -u +%T) lammps $1 N=$2 ranks=$3 rep=$4: $(grep -A40 PEER_TIMED_BEGIN "$out" | grep -m1 -o 'Loop time of [0-9.e+-]*' || echo '?')"
@@ -141,7 +147,7 @@ run_lammps() {  # model n ranks rep
 run_triad() {  # threads rep
   local out=$logs/triad_t$1_r$2
   local first=${sizes%% *}
-  OMP_NUM_THREADS=$1 "$bench" --kokkos-threads="$1" --data "$peer/data/packing_$first.data" \
+  OMP_NUM_THREADS=$1 "${prio[@]}" "$bench" --kokkos-threads="$1" --data "$peer/data/packing_$first.data" \
     --physics frictionless --reps 1 --steps 1 --warmup 0 --out "$out.json" > "$out.log" 2>&1 ||
     say "FAILED: $out.log"
 }
