@@ -69,7 +69,7 @@ for k, dd in enumerate(d["default_time_steps"]):
 ax[0].set_xlabel("dt / t_c  (t_c = pi sqrt(m_red/k) of the lightest pair = %.3f us)" % d["contact_time_us"])
 ax[0].set_ylabel("relative energy error over %g t_c" % d["simulated_time_in_tc"])
 ax[0].set_title("Undamped dense packing, N = %d: energy error vs dt" % d["N"])
-ax[0].legend(fontsize=6.5, loc="upper left")
+ax[0].legend(fontsize=6.5, loc="best")
 ax[0].grid(True, which="both", alpha=0.3)
 
 pick = [r for r in rows if r["fraction"] in (0.01, 0.05, 0.1, 0.3, 0.5)] + unstable[:1]

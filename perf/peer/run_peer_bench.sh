@@ -3,12 +3,13 @@
 # contact law, time step, skin and number of steps. One command does everything:
 #
 #   perf/peer/run_peer_bench.sh                    # N = 4096 32768, 3 repetitions
-#   perf/peer/run_peer_bench.sh --big              # also N = 262144 (packing ~1 h to make)
+#   perf/peer/run_peer_bench.sh --big              # also N = 262144 (a 2x2x2 replica of 32768)
 #   perf/peer/run_peer_bench.sh --sizes "4096" --reps 5
 #
 #   1. installs LAMMPS (Debian package lammps, MPI build), GNU time and matplotlib if missing;
 #   2. builds the engine (scripts/setup.sh);
-#   3. makes each packing once with LAMMPS (perf/peer/gen_packing.lmp, one rank, seed 12345),
+#   3. makes each packing once with LAMMPS (perf/peer/gen_packing.lmp, one rank, seed 12345;
+#      N >= 262144 as a 2x2x2 replica of N/8, perf/peer/replicate.lmp, unless GEN_REPLICATE=0),
 #      cached as perf/peer/data/packing_<N>.data: both codes read this file;
 #   4. times, interleaved (repetition 1 of every configuration, then repetition 2, ...):
 #        engine --physics friction and frictionless with 1 and 2 threads,
@@ -94,18 +95,28 @@ bench=${GRANULAR_BUILD:-$repo/build}/bin/bench_dem_throughput
 
 # ---- 3. packings, made by LAMMPS, shared by both codes ----------------------------------
 mkdir -p "$peer/data"
-for n in $sizes; do
-  f=$peer/data/packing_$n.data
-  [ -s "$f" ] && continue
-  say "making the packing N = $n with LAMMPS (cached in $f)"
-  gen_np=${GEN_NP:-1}
-  launch=()
-  [ "$gen_np" -gt 1 ] && launch=(mpirun --allow-run-as-root --bind-to core -np "$gen_np")
-  (cd "$peer/data" && "${launch[@]}" lmp -in "$peer/gen_packing.lmp" -var N "$n" \
-    -var out "packing_$n.data.tmp" -log "gen_$n.log" -echo none -screen none)
+make_packing() {  # n
+  local n=$1 f=$peer/data/packing_$1.data small
+  [ -s "$f" ] && return 0
+  small=$((n / 8))
+  if [ "$n" -ge 262144 ] && [ "${GEN_REPLICATE:-1}" = 1 ]; then
+    # Large sizes: a 2 x 2 x 2 replica of the packing eight times smaller (made if needed).
+    make_packing "$small"
+    say "making the packing N = $n as a 2x2x2 replica of N = $small (cached in $f)"
+    (cd "$peer/data" && lmp -in "$peer/replicate.lmp" -var in "packing_$small.data" \
+      -var out "packing_$n.data.tmp" -log "gen_$n.log" -echo none -screen none)
+  else
+    say "making the packing N = $n with LAMMPS (cached in $f)"
+    gen_np=${GEN_NP:-1}
+    launch=()
+    [ "$gen_np" -gt 1 ] && launch=(mpirun --allow-run-as-root --bind-to core -np "$gen_np")
+    (cd "$peer/data" && "${launch[@]}" lmp -in "$peer/gen_packing.lmp" -var N "$n" \
+      -var out "packing_$n.data.tmp" -log "gen_$n.log" -echo none -screen none)
+    grep PACKING_DONE "$peer/data/gen_$n.log" >&2 || true
+  fi
   mv "$f.tmp" "$f"
-  grep PACKING_DONE "$peer/data/gen_$n.log" >&2 || true
-done
+}
+for n in $sizes; do make_packing "$n"; done
 
 # ---- 4. interleaved timing ---------------------------------------------------------------
 stamp=$(date -u +%Y%m%dT%H%M%SZ)

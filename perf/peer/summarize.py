@@ -1,9 +1,11 @@
 #!/usr/bin/python3
 """Summarise one run of perf/peer/run_peer_bench.sh.
 
-    summarize.py perf/peer/logs/<stamp> [--results perf/results]
+    summarize.py perf/peer/logs/<stamp> [more run directories] [--results perf/results]
 
-Reads the engine's JSON files and LAMMPS' logs of one run directory and writes
+Reads the engine's JSON files and LAMMPS' logs of the run directories (several: e.g. a
+separate run for N = 262144 with fewer configurations; the first one names the result) and
+writes
   <results>/peer_<stamp>.json   every repetition, medians, ratios, cross-check, memory
   <results>/peer_latest.md      the tables
   <results>/peer_latest.png     throughput per configuration, cost scaling with N, ratios
@@ -18,10 +20,11 @@ import re
 import statistics
 
 ap = argparse.ArgumentParser()
-ap.add_argument("logs")
+ap.add_argument("logs", nargs="+")
 ap.add_argument("--results", default=os.path.join(os.path.dirname(__file__), "..", "results"))
 args = ap.parse_args()
-logs = os.path.abspath(args.logs)
+dirs = [os.path.abspath(x) for x in args.logs]
+logs = dirs[0]
 stamp = os.path.basename(logs.rstrip("/"))
 results = os.path.abspath(args.results)
 os.makedirs(results, exist_ok=True)
@@ -51,7 +54,7 @@ def rss_kb(text):
 
 runs = []
 machine = None
-for path in sorted(glob.glob(os.path.join(logs, "engine_*.json"))):
+for path in sorted(sum((glob.glob(os.path.join(x, "engine_*.json")) for x in dirs), [])):
     m = re.match(r"engine_(\w+?)_N(\d+)_t(\d+)_r(\d+)\.json$", os.path.basename(path))
     if not m:
         continue
@@ -73,7 +76,7 @@ for path in sorted(glob.glob(os.path.join(logs, "engine_*.json"))):
                      neighbor_builds=row["neighbor_builds_in_timed_window"],
                      neighbors_full_list=row["neighbors_per_particle_full_list"]))
 
-for path in sorted(glob.glob(os.path.join(logs, "lammps_*.log"))):
+for path in sorted(sum((glob.glob(os.path.join(x, "lammps_*.log")) for x in dirs), [])):
     m = re.match(r"lammps_(\w+?)_N(\d+)_np(\d+)_r(\d+)\.log$", os.path.basename(path))
     if not m:
         continue
@@ -106,7 +109,7 @@ for path in sorted(glob.glob(os.path.join(logs, "lammps_*.log"))):
                      neighbor_builds=int(nb.group(1)) if nb else None))
 
 triad = {}
-for path in sorted(glob.glob(os.path.join(logs, "triad_t*_r*.json"))):
+for path in sorted(sum((glob.glob(os.path.join(x, "triad_t*_r*.json")) for x in dirs), [])):
     m = re.match(r"triad_t(\d+)_r(\d+)\.json$", os.path.basename(path))
     d = json.load(open(path))
     machine = machine or d["machine"]
@@ -178,7 +181,7 @@ for phys, model in CROSS:
         b = [r for r in runs if r["code"] == "lammps" and r["config"] == model and r["N"] == N and r["par"] == 1]
         if not a or not b:
             continue
-        a, b = a[0], b[0]
+        a, b = a[-1], b[-1]  # the latest run (1 thread / 1 rank runs are deterministic)
         c = dict(engine=phys, lammps=model, N=N)
         ok = True
         for q in ("ke_initial", "ke_warmup", "ke_end", "z_initial", "z_end"):
@@ -201,7 +204,7 @@ for code, config in sorted({(s["code"], s["config"]) for s in summary}):
             memory.append(dict(code=code, config=config, par=p, N_small=a["N"], N_large=b["N"],
                                marginal_bytes_per_particle=(b["median_rss_kB"] - a["median_rss_kB"]) * 1024 / (b["N"] - a["N"])))
 
-out = dict(benchmark="peer_comparison", stamp=stamp, machine=machine, settings=settings,
+out = dict(benchmark="peer_comparison", stamp=stamp, run_directories=[os.path.basename(x) for x in dirs], machine=machine, settings=settings,
            triad_GBs=triad, triad_best_GBs=triad_best, runs=runs, summary=summary, ratios=ratios,
            cross_check=cross, memory=memory)
 json_path = os.path.join(results, "peer_%s.json" % stamp)
