@@ -4,7 +4,9 @@
 //
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
-//                        [--out perf/results/dem_throughput_2t.json]
+//                        [--out perf/results/dem_throughput_2t.json] [--no-triad]
+// --no-triad skips the bandwidth measurement (its 768 MiB of arrays would also dominate the
+// peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
 //   frictionless   linear normal spring-dashpot only (no history, no rotations)
 //   friction       + tangential spring with history and Coulomb mu = 0.5, rotations
@@ -22,15 +24,17 @@
 
 #include "core/lammps_data.hpp"
 #include "core/output.hpp"
+#include "dense_packing.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "machine_info.hpp"
 #include "scenarios/contact_config.hpp"
 #include "scenarios/dem_output.hpp"
-#include "scenarios/packing.hpp"
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;
+using perf::bench_params;
+using perf::dense_packing;
 
 namespace {
 
@@ -64,52 +68,6 @@ ContactConfig physics_config(const std::string& name) {
   throw std::runtime_error("unknown physics '" + name +
                            "' (frictionless, friction, rolling, hertz_mindlin, hysteretic, all)");
 }
-DemParams bench_params() {
-  DemParams p;
-  p.dt = 0.0045;
-  p.skin = 0.2;
-  p.max_overlap = 1.0;
-  return p;
-}
-
-// A dense packing: random gas at phi 0.3, fast damped compression to 0.64 with a little
-// friction (mu = 0.1, which jams the packing there, as in the peer's generator), short
-// relaxation; cached as HDF5 so later runs (other thread counts) time the same state.
-HostParticles dense_packing(int n, PeriodicBox& box, const std::string& cache_dir) {
-  const std::string path = cache_dir + "/packing_" + std::to_string(n) + ".h5";
-  if (std::filesystem::exists(path)) {
-    H5Reader in(path);
-    double density;
-    return read_state(in, "/state", box, density);
-  }
-  std::cerr << "preparing a dense packing of " << n << " spheres (cached in " << path << ")\n";
-  GasSpec g;
-  g.count = n, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.3,
-  g.seed = 12345;
-  const HostParticles gas = random_gas(g, box);
-  DemParams prm = bench_params();
-  prm.dt = 0.004;
-  prm.damping.translational = 100;
-  prm.damping.rotational = 20;
-  using Prep = ContactModel<LinearNormal, CoulombTangential>;
-  const Prep prep{
-      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 500, 0.1, 0.1), {}};
-  DemSystem<Exec, Prep> sys(Particles<Exec>::from_host(gas), box, prep, prm);
-  const double rate = -2e-2 / 3;  // volumetric 2e-2 per us
-  const long steps = static_cast<long>(std::log(0.64 / 0.3) / (-3 * std::log1p(rate * prm.dt)));
-  sys.set_strain_rate(rate, rate, rate);
-  sys.step(steps);
-  sys.set_strain_rate(0, 0, 0);
-  sys.step(2000);
-  std::filesystem::create_directories(cache_dir);
-  H5Writer out(path);
-  write_state(out, "/state", sys.particles(), sys.box(), 2000.0);
-  out.commit();
-  H5Reader in(path);
-  double density;
-  return read_state(in, "/state", box, density);
-}
-
 std::vector<int> parse_sizes(const std::string& s) {
   std::vector<int> out;
   std::stringstream ss(s);
@@ -131,6 +89,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
+    bool triad = true;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -154,6 +113,8 @@ int main(int argc, char** argv) {
         out = next();
       else if (a == "--cache")
         cache_dir = next();
+      else if (a == "--no-triad")
+        triad = false;
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
@@ -162,11 +123,11 @@ int main(int argc, char** argv) {
     const int threads = Exec::concurrency();
     if (out.empty()) out = "perf/results/dem_throughput_" + std::to_string(threads) + "t.json";
 
-    const double bandwidth = perf::triad_bandwidth();
+    const double bandwidth = triad ? perf::triad_bandwidth() : 0.0;
     Json result = Json::object();
     result["benchmark"] = "dem_throughput";
     result["machine"] = perf::machine_info();
-    result["triad_bandwidth_GBs"] = bandwidth / 1e9;
+    if (triad) result["triad_bandwidth_GBs"] = bandwidth / 1e9;
     result["parameters"] =
         "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
     result["steps_timed"] = steps;
@@ -200,13 +161,17 @@ int main(int argc, char** argv) {
           const int n = host.size();
           std::vector<double> rates;
           StepProfile prof;
-          double z_start = 0, z_end = 0, phi = 0, ekin_start = 0, ekin_end = 0, erot_start = 0,
-                 erot_end = 0;
+          double z_initial = 0, ekin_initial = 0, z_start = 0, z_end = 0, phi = 0, ekin_start = 0,
+                 ekin_end = 0, erot_start = 0, erot_end = 0;
           long builds = 0;
           double entries = 0;
           for (int r = 0; r < reps; ++r) {
             DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model,
                                        bench_params());
+            if (r == 0) {
+              const Measurements mi = sys.measure();
+              z_initial = mi.z, ekin_initial = mi.ekin - mi.ekin_rot;
+            }
             sys.step(warmup);
             const Measurements m0 = sys.measure();
             const long builds0 = sys.neighbor_list().builds();
@@ -244,6 +209,8 @@ int main(int argc, char** argv) {
           row["source"] = source;
           row["threads"] = threads;
           row["phi"] = phi;
+          row["z_initial"] = z_initial;
+          row["ekin_translational_initial_J"] = ekin_initial * 1e-3;
           row["z_start"] = z_start;
           row["z_end"] = z_end;
           // Energy unit ug mm^2 / us^2 = 1e-3 J. Translational part separately: that is what
@@ -258,7 +225,9 @@ int main(int argc, char** argv) {
           row["median_particle_steps_per_s"] = med;
           row["bytes_per_particle_step"] = bytes;
           row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
-          row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
+          if (triad) row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
+          // Peak resident memory of the process so far (all rows up to this one).
+          row["resident_kB"] = perf::peak_resident_kB();
           Json split = Json::object();
           split["force"] = prof.force / prof_total;
           split["integrate"] = prof.integrate / prof_total;
@@ -267,9 +236,11 @@ int main(int argc, char** argv) {
           row["profile_fraction"] = split;
           rows.push(row);
           std::cout << phys << " N " << n << " threads " << threads << ": median " << med / 1e6
-                    << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step, "
-                    << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9
-                    << " GB/s\n";
+                    << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step";
+          if (triad)
+            std::cout << ", " << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9
+                      << " GB/s";
+          std::cout << "\n";
         });
     result["rows"] = rows;
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());

@@ -19,6 +19,15 @@ inline std::string cpu_model() {
   return "unknown";
 }
 
+// Peak resident set size of this process (VmHWM of /proc/self/status) in kB; -1 if unknown.
+inline long peak_resident_kB() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
 inline Json machine_info() {
   Json m = Json::object();
   m["cpu_model"] = cpu_model();
@@ -28,6 +37,7 @@ inline Json machine_info() {
   m["kokkos_concurrency"] = Kokkos::DefaultExecutionSpace::concurrency();
   const char* bind = std::getenv("OMP_PROC_BIND");
   m["OMP_PROC_BIND"] = bind ? bind : "unset";
+  m["resident_kB"] = peak_resident_kB();  // peak so far, at the time of the call
   return m;
 }
 

@@ -1,0 +1,292 @@
+// Speed against accuracy of the DEM integrator: energy conservation of an undamped dense
+// packing (frictionless linear springs, no dashpots, no background damping) against the
+// time step, and the cost of a unit of simulated time.
+//
+//   bench_dem_energy_vs_dt --kokkos-threads=2 [--n 4096] [--periods 100] [--cache DIR]
+//                          [--fractions 0.005,0.01,...] [--out perf/results/dem_energy_vs_dt.json]
+//
+// The time step is given as a fraction of t_c = pi sqrt(m_red / k_n), the contact duration
+// of the lightest pair (two smallest spheres). Each run starts from the same state (the
+// throughput benchmark's dense packing plus Gaussian velocities), advances `periods` t_c of
+// simulated time and samples the total energy E = E_kin + E_pot about 200 times.
+// Velocity Verlet conserves a shadow energy: the relative error should scale like dt^2
+// until the step crosses the stability edge dt = 2 / omega_max of the contact network,
+// where the energy grows without bound; the engine's guards (non-finite energy, runaway
+// overlap or energy) then stop the run and the row is recorded as "unstable".
+// The engine's own time-step guard (dt <= t_c/10) is lifted here, since the scan goes past it.
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/output.hpp"
+#include "core/rng.hpp"
+#include "dense_packing.hpp"
+#include "kernels/contact_model.hpp"
+#include "kernels/dem_system.hpp"
+#include "machine_info.hpp"
+
+using namespace granular;
+using Exec = Kokkos::DefaultExecutionSpace;
+
+namespace {
+
+constexpr double kKn = 1e5;  // normal stiffness, ug/us^2 (= 1e8 N/m)
+
+// Largest angular frequency of the normal-spring network of the initial state: power
+// iteration on the mass-weighted stiffness matrix M^-1/2 K M^-1/2 (normal springs only;
+// the geometric term f/r is below 1 % here), and the Gershgorin bound on it.
+struct NetworkFrequency {
+  double omega_power = 0, omega_gershgorin = 0;
+  long contacts = 0;
+};
+
+NetworkFrequency network_frequency(const HostParticles& h, const PeriodicBox& box) {
+  const int n = h.size();
+  std::vector<double> m(n);
+  for (int i = 0; i < n; ++i)
+    m[i] = h.density[i] * 4.0 / 3.0 * M_PI * h.radius[i] * h.radius[i] * h.radius[i];
+  struct Pair {
+    int i, j;
+    double nx[3];
+  };
+  std::vector<Pair> pairs;
+  std::vector<double> row(n, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) {
+      double d[3] = {box.min_image(h.x[j] - h.x[i], 0), box.min_image(h.y[j] - h.y[i], 1),
+                     box.min_image(h.z[j] - h.z[i], 2)};
+      const double r = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      if (r >= h.radius[i] + h.radius[j]) continue;
+      pairs.push_back({i, j, {d[0] / r, d[1] / r, d[2] / r}});
+      const double off = kKn / std::sqrt(m[i] * m[j]);
+      row[i] += kKn / m[i] + off;
+      row[j] += kKn / m[j] + off;
+    }
+  NetworkFrequency out;
+  out.contacts = static_cast<long>(pairs.size());
+  out.omega_gershgorin = std::sqrt(*std::max_element(row.begin(), row.end()));
+  // Power iteration on D = M^-1/2 K M^-1/2 (positive semi-definite): y = D x.
+  std::vector<double> x(3 * n), y(3 * n);
+  Stream rng(7, 0);
+  for (double& v : x) v = rng.uniform(-1, 1);
+  double lambda = 0;
+  for (int it = 0; it < 500; ++it) {
+    std::fill(y.begin(), y.end(), 0.0);
+    for (const Pair& p : pairs) {
+      // u = x_i/sqrt(m_i) - x_j/sqrt(m_j); spring force k (n.u) n.
+      const double si = 1 / std::sqrt(m[p.i]), sj = 1 / std::sqrt(m[p.j]);
+      double nu = 0;
+      for (int d = 0; d < 3; ++d) nu += p.nx[d] * (x[3 * p.i + d] * si - x[3 * p.j + d] * sj);
+      for (int d = 0; d < 3; ++d) {
+        y[3 * p.i + d] += kKn * nu * p.nx[d] * si;
+        y[3 * p.j + d] -= kKn * nu * p.nx[d] * sj;
+      }
+    }
+    double norm = 0, dot = 0;
+    for (int k = 0; k < 3 * n; ++k) norm += y[k] * y[k], dot += x[k] * y[k];
+    norm = std::sqrt(norm);
+    double xx = 0;
+    for (int k = 0; k < 3 * n; ++k) xx += x[k] * x[k];
+    lambda = dot / xx;
+    for (int k = 0; k < 3 * n; ++k) x[k] = y[k] / norm;
+  }
+  out.omega_power = std::sqrt(lambda);
+  return out;
+}
+
+std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Kokkos::initialize(argc, argv);
+  int rc = 0;
+  try {
+    int n = 4096;
+    double periods = 100;      // simulated time in units of t_c
+    double v_sigma = 5e-5;     // mm/us = 0.05 m/s per component, as in the peer packings
+    int samples_target = 200;  // energy samples per run
+    std::string cache_dir = "perf_cache", out = "perf/results/dem_energy_vs_dt.json";
+    std::string fractions =
+        "0.005,0.01,0.02,0.03,0.05,0.07,0.1,0.14,0.2,0.25,0.3,0.35,0.4,0.45,0.5,0.55,0.6,0.65,"
+        "0.7,0.8";
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
+        return argv[++i];
+      };
+      if (a == "--n")
+        n = std::stoi(next());
+      else if (a == "--periods")
+        periods = std::stod(next());
+      else if (a == "--fractions")
+        fractions = next();
+      else if (a == "--cache")
+        cache_dir = next();
+      else if (a == "--out")
+        out = next();
+      else if (a == "--samples")
+        samples_target = std::stoi(next());
+      else if (a.rfind("--kokkos", 0) != 0) {
+        std::cerr << "unknown option " << a << "\n";
+        return 2;
+      }
+    }
+
+    PeriodicBox box;
+    HostParticles host = perf::dense_packing(n, box, cache_dir);
+    n = host.size();
+    for (int i = 0; i < n; ++i) {  // Gaussian velocities, zero net momentum
+      Stream s(12345, static_cast<std::uint64_t>(i));
+      host.vx[i] = v_sigma * s.normal(), host.vy[i] = v_sigma * s.normal(),
+      host.vz[i] = v_sigma * s.normal();
+    }
+    {
+      double p[3] = {0, 0, 0}, mt = 0;
+      for (int i = 0; i < n; ++i) {
+        const double m = host.density[i] * std::pow(host.radius[i], 3);
+        p[0] += m * host.vx[i], p[1] += m * host.vy[i], p[2] += m * host.vz[i], mt += m;
+      }
+      for (int i = 0; i < n; ++i)
+        host.vx[i] -= p[0] / mt, host.vy[i] -= p[1] / mt, host.vz[i] -= p[2] / mt;
+    }
+
+    // t_c of the lightest pair, undamped: pi sqrt(m_red / k).
+    std::vector<double> masses(n);
+    for (int i = 0; i < n; ++i)
+      masses[i] = host.density[i] * 4.0 / 3.0 * M_PI * std::pow(host.radius[i], 3);
+    std::partial_sort(masses.begin(), masses.begin() + 2, masses.end());
+    const double m_red = masses[0] * masses[1] / (masses[0] + masses[1]);
+    const double omega_pair = std::sqrt(kKn / m_red);
+    const double tc = M_PI / omega_pair;
+    const NetworkFrequency net = network_frequency(host, box);
+    std::cerr << "t_c = " << tc << " us; stability edge dt/t_c: pair " << 2 / (omega_pair * tc)
+              << ", network (power iteration) " << 2 / (net.omega_power * tc)
+              << ", Gershgorin bound " << 2 / (net.omega_gershgorin * tc) << "\n";
+
+    const FrictionlessLinear model = frictionless_linear(kKn, 0.0);
+    Json result = Json::object();
+    result["benchmark"] = "dem_energy_vs_dt";
+    result["machine"] = perf::machine_info();
+    result["N"] = n;
+    result["physics"] =
+        "frictionless linear spring k_n 1e5 ug/us^2 (1e8 N/m), no dashpot, no background "
+        "damping, velocity Verlet";
+    result["initial_state"] =
+        "dense packing of bench_dem_throughput (phi 0.64, made with mu 0.1) + Gaussian "
+        "velocities 0.05 m/s per component";
+    result["contact_time_us"] = tc;
+    result["simulated_time_us"] = periods * tc;
+    result["simulated_time_in_tc"] = periods;
+    result["omega_pair_per_us"] = omega_pair;
+    result["omega_max_network_per_us"] = net.omega_power;
+    result["omega_gershgorin_bound_per_us"] = net.omega_gershgorin;
+    result["initial_contacts"] = net.contacts;
+    result["edge_fraction_pair"] = 2 / (omega_pair * tc);
+    result["edge_fraction_network"] = 2 / (net.omega_power * tc);
+    result["edge_fraction_gershgorin"] = 2 / (net.omega_gershgorin * tc);
+    result["engine_guard_fraction"] = DemParams{}.dt_guard;  // the default refuses dt > t_c/10
+    Json defaults = Json::array();
+    {
+      Json d = Json::object();
+      d["what"] = "scenes (isotropic_compression, elastic_moduli): dt = 0.004 us";
+      d["dt_us"] = 0.004;
+      d["fraction"] = 0.004 / tc;
+      defaults.push(d);
+      Json e = Json::object();
+      e["what"] = "benchmarks and peer decks: dt = 0.0045 us (t_c/50 of the damped pair)";
+      e["dt_us"] = 0.0045;
+      e["fraction"] = 0.0045 / tc;
+      defaults.push(e);
+    }
+    result["default_time_steps"] = defaults;
+
+    Json rows = Json::array();
+    for (const double f : parse_list(fractions)) {
+      DemParams prm = perf::bench_params();
+      prm.dt = f * tc;
+      prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose
+      prm.max_overlap = 0.5;  // runaway-overlap guard, as in the scenes
+      const long steps = std::max(1L, std::lround(periods / f));
+      const long every = std::max(1L, steps / samples_target);
+      Json row = Json::object();
+      row["fraction"] = f;
+      row["dt_us"] = prm.dt;
+      row["steps"] = steps;
+      std::vector<double> t_s, e_s;
+      double wall = 0, e0 = 0, ekin0 = 0, max_err = 0, ekin_max = 0;
+      std::string status = "stable", message;
+      long done = 0;
+      try {
+        DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(host), box, model, prm);
+        const Measurements m0 = sys.measure();
+        e0 = m0.ekin + m0.epot, ekin0 = m0.ekin;
+        t_s.push_back(0), e_s.push_back(0);
+        while (done < steps) {
+          const long k = std::min(every, steps - done);
+          Kokkos::fence();
+          Kokkos::Timer timer;
+          sys.step(k);
+          Kokkos::fence();
+          wall += timer.seconds();
+          done += k;
+          const Measurements m = sys.measure();
+          const double err = (m.ekin + m.epot - e0) / e0;
+          t_s.push_back(sys.time() / tc), e_s.push_back(err);
+          if (std::isfinite(err)) max_err = std::max(max_err, std::abs(err));
+          if (std::isfinite(m.ekin)) ekin_max = std::max(ekin_max, m.ekin);
+          sys.check_health(m);
+          if (!(std::abs(err) < 1.0)) throw PhysicsError("total energy changed by more than 100 %");
+        }
+      } catch (const PhysicsError& e) {
+        status = "unstable";
+        message = e.what();
+      }
+      row["status"] = status;
+      if (!message.empty()) row["stopped_by"] = message;
+      row["steps_done"] = done;
+      row["initial_energy"] = e0;
+      row["initial_kinetic_energy"] = ekin0;
+      row["max_kinetic_energy"] = ekin_max;
+      row["max_relative_energy_error"] = max_err;
+      // The same error against the largest kinetic energy of the run (the energy in motion).
+      if (ekin_max > 0) row["max_energy_error_over_max_kinetic"] = max_err * e0 / ekin_max;
+      row["final_relative_energy_error"] = e_s.back();
+      row["wall_s"] = wall;
+      if (done > 0) {
+        row["cost_s_per_us_simulated"] = wall / (done * prm.dt);
+        row["cost_s_per_tc_simulated"] = wall / (done * prm.dt) * tc;
+        row["particle_steps_per_s"] = static_cast<double>(n) * done / wall;
+      }
+      row["time_in_tc"] = t_s;
+      row["relative_energy_error"] = e_s;
+      rows.push(row);
+      std::cout << "dt/t_c " << f << ": " << status << ", max |dE|/E " << max_err << ", " << done
+                << "/" << steps << " steps, " << wall << " s";
+      if (done > 0) std::cout << ", " << wall / (done * prm.dt) * tc << " s per t_c";
+      std::cout << "\n";
+    }
+    result["rows"] = rows;
+    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
+    write_text_file(out, result.dump());
+    std::cout << "wrote " << out << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    rc = 1;
+  }
+  Kokkos::finalize();
+  return rc;
+}
