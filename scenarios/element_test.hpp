@@ -14,9 +14,13 @@ namespace granular {
 
 // Strains the box isotropically at `rate` (per axis, signed) until phi crosses `target`;
 // calls `sample` every `every` steps. Returns the steps taken.
+// With `rate_of`, the rate is re-chosen from each sample (e.g. for a target inertial
+// number); it must keep the sign of `rate`.
 template <class System>
 long strain_to_phi(System& sys, double target, double rate, long every,
-                   const std::function<void(const Measurements&)>& sample) {
+                   const std::function<void(const Measurements&)>& sample,
+                   const std::function<double(const Measurements&)>& rate_of = nullptr) {
+  if (rate_of) rate = rate_of(sys.measure());
   sys.set_strain_rate(rate, rate, rate);
   long steps = 0;
   const bool compress = rate < 0;
@@ -31,6 +35,10 @@ long strain_to_phi(System& sys, double target, double rate, long every,
     const Measurements m = sys.measure();
     sys.check_health(m);
     if (sample) sample(m);
+    if (rate_of) {
+      rate = rate_of(m);
+      sys.set_strain_rate(rate, rate, rate);
+    }
   }
   sys.set_strain_rate(0, 0, 0);
   return steps;
@@ -54,6 +62,10 @@ double relax(System& sys, double ratio, long max_steps, long every = 500) {
 struct Moduli {
   double K = 0, G = 0, M = 0;                 // bulk, shear, P-wave (uniaxial) moduli
   double K_n = 0, K_t = 0, G_n = 0, G_t = 0;  // from normal / tangential contact forces
+  // Non-affine displacement fluctuation at the end of each loading probe, as
+  // sum_c |Delta| / sum_c |eps l| (defined for every mode), and for the isotropic probe also
+  // the per-contact mean (1/M) sum_c |Delta| / |eps l| (there eps l never vanishes).
+  double eta_K = 0, eta_G = 0, eta_M = 0, eta_K_per_contact = 0;
 };
 
 // Probes a relaxed system in place, keeping its contact history: for each mode (isotropic,
@@ -73,12 +85,15 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
     sys.set_strain_rate(0, 0, 0);
     sys.step(relax_steps);
   };
+  NonAffine na;
   auto run = [&](const std::array<double, 3>& pattern, Measurements& before, Measurements& after,
                  std::array<double, 3>& eps) {
     const PeriodicBox box0 = sys.box();
+    const auto x0 = positions_by_id(sys.particles());
     before = sys.measure();
     strain(pattern, +1);
     after = sys.measure();
+    na = nonaffine_fluctuation(sys.particles(), sys.neighbor_list(), sys.box(), box0, x0);
     for (int d = 0; d < 3; ++d) eps[d] = -std::log(sys.box().len[d] / box0.len[d]);
     strain(pattern, -1);
   };
@@ -91,6 +106,7 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
   out.K = (b.pressure - a.pressure) / ev;
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
+  out.eta_K = na.eta_ratio, out.eta_K_per_contact = na.eta;
   if (reversal_residual)
     *reversal_residual = (sys.measure().pressure - a.pressure) / (b.pressure - a.pressure);
   run({1, -1, 0}, a, b, e);
@@ -101,8 +117,10 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
   out.G_t = ((b.stress_tangential[0] - b.stress_tangential[1]) -
              (a.stress_tangential[0] - a.stress_tangential[1])) /
             ed;
+  out.eta_G = na.eta_ratio;
   run({1, 0, 0}, a, b, e);
   out.M = (b.stress[0] - a.stress[0]) / e[0];
+  out.eta_M = na.eta_ratio;
   return out;
 }
 
