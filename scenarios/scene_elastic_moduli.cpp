@@ -223,13 +223,13 @@ long steps_for(const Setup& s, double amplitude, double base_rate) {
   return std::clamp(static_cast<long>(std::ceil(steps)), 20L, s.max_strain_steps);
 }
 
-// Probes a saved configuration: each probe restarts from it, so probes do not disturb one
+// Probes a saved configuration: each mode restarts from it, so probes do not disturb one
 // another and give bitwise the same result whether the state is in memory or read back.
 template <class Model>
 Moduli probe_config(const ConfigState& c, const Model& model, const DemParams& params,
                     double amplitude, long steps, long relax, double* reversal) {
-  auto sys = restart_system<DemSystem<Exec, Model>>(c, model, params);
-  return probe_moduli(sys, amplitude, steps, relax, reversal);
+  auto make = [&] { return restart_system<DemSystem<Exec, Model>>(c, model, params); };
+  return probe_moduli_restarting(make, amplitude, steps, relax, reversal);
 }
 
 double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }
@@ -432,6 +432,8 @@ void prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
 }
 
 }  // namespace
+
+void check_elastic_moduli(const SceneFile& scene) { read_setup(scene); }
 
 void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup s = read_setup(scene);
