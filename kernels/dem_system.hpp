@@ -45,6 +45,7 @@ class DemSystem {
  public:
   using execution_space = ExecSpace;
   using model_type = Model;
+  using particles_type = Particles<ExecSpace>;
 
   DemSystem(Particles<ExecSpace> particles, const PeriodicBox& box, const Model& model,
             const DemParams& params)

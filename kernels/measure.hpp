@@ -158,15 +158,34 @@ struct NonAffine {
   double contacts = 0;   // M
 };
 
+// Displacements by identity from positions x0 to x1 (both by identity, same box).
+template <class ExecSpace>
+typename Particles<ExecSpace>::vec_view displacement_by_id(
+    const typename Particles<ExecSpace>::vec_view& x0,
+    const typename Particles<ExecSpace>::vec_view& x1, const PeriodicBox& box) {
+  typename Particles<ExecSpace>::vec_view out("measure::displacement", x0.extent(0));
+  const PeriodicBox b = box;
+  Kokkos::parallel_for(
+      "dem::displacement_by_id", Kokkos::RangePolicy<ExecSpace>(0, x0.extent(0)),
+      KOKKOS_LAMBDA(const int i) {
+        for (int d = 0; d < 3; ++d) out(i, d) = b.min_image(x1(i, d) - x0(i, d), d);
+      });
+  return out;
+}
+
 // Non-affine displacement fluctuation of the contacts of the current state relative to a
 // reference (positions x0 by identity in box0; the box deformed about its lower corner).
+// An optional `drift` (displacement by identity that the state makes without strain in
+// the same time) is subtracted from every particle's displacement first.
 // Each particle's non-affine displacement is u_i = x_i - A(x0_i), A the affine map
 // x -> lo + (x - lo) L/L0; for a contact Delta = u_i - u_j is the relative displacement
 // minus its affine part eps l, with eps = L/L0 - 1 per axis and l the branch vector.
 template <class ExecSpace>
 NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                                 const PeriodicBox& box, const PeriodicBox& box0,
-                                const typename Particles<ExecSpace>::vec_view& x0) {
+                                const typename Particles<ExecSpace>::vec_view& x0,
+                                const typename Particles<ExecSpace>::vec_view& drift = {}) {
+  const bool has_drift = drift.extent(0) == static_cast<size_t>(p.n);
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::nonaffine", p.n, 4);
   const ParticleViews<ExecSpace> pv(p);
@@ -189,8 +208,12 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
           const double l[3] = {rx, ry, rz};
           double dd = 0, ee = 0;
           for (int d = 0; d < 3; ++d) {
-            const double ui = b.min_image(pv.x(i, d) - b.lo[d] - (x0(idi, d) - b.lo[d]) * s[d], d);
-            const double uj = b.min_image(pv.x(j, d) - b.lo[d] - (x0(idj, d) - b.lo[d]) * s[d], d);
+            const double di = has_drift ? drift(idi, d) : 0.0;
+            const double dj = has_drift ? drift(idj, d) : 0.0;
+            const double ui =
+                b.min_image(pv.x(i, d) - b.lo[d] - (x0(idi, d) - b.lo[d]) * s[d] - di, d);
+            const double uj =
+                b.min_image(pv.x(j, d) - b.lo[d] - (x0(idj, d) - b.lo[d]) * s[d] - dj, d);
             const double el = (s[d] - 1.0) * l[d];
             dd += (ui - uj) * (ui - uj);
             ee += el * el;

@@ -93,14 +93,15 @@ void probe_strain(System& sys, const std::array<double, 3>& pattern, double sign
 
 template <class System>
 ModeResult probe_mode(System& sys, const std::array<double, 3>& pattern, double amplitude,
-                      long strain_steps, long relax_steps) {
+                      long strain_steps, long relax_steps,
+                      const typename System::particles_type::vec_view& drift = {}) {
   ModeResult r;
   const PeriodicBox box0 = sys.box();
   const auto x0 = positions_by_id(sys.particles());
   r.before = sys.measure();
   probe_strain(sys, pattern, +1, amplitude, strain_steps, relax_steps);
   r.after = sys.measure();
-  r.na = nonaffine_fluctuation(sys.particles(), sys.neighbor_list(), sys.box(), box0, x0);
+  r.na = nonaffine_fluctuation(sys.particles(), sys.neighbor_list(), sys.box(), box0, x0, drift);
   for (int d = 0; d < 3; ++d) r.eps[d] = -std::log(sys.box().len[d] / box0.len[d]);
   return r;
 }
@@ -152,17 +153,23 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
 // the modes do not disturb one another. A reference run from the same state without
 // strain, as long as a probe, gives the stress the state would reach on its own (residual
 // relaxation): stress increments are taken against it, which removes that drift from the
-// moduli. The isotropic probe is then reversed for the reversal test.
+// moduli; the particle displacements of that run are likewise subtracted before the
+// non-affine fluctuation is computed. The isotropic probe is then reversed for the
+// reversal test.
 template <class Factory>
 Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strain_steps,
                                long relax_steps, double* reversal_residual = nullptr) {
   ModeResult r[3];
   const std::array<double, 3> modes[3] = {kIsotropic, kPureShear, kUniaxial};
   Measurements reference, reference2;  // after one and after two probe durations
+  typename decltype(make())::particles_type::vec_view drift;
   {
     auto sys = make();
+    const auto x0 = positions_by_id(sys.particles());
     sys.step(strain_steps + relax_steps);
     reference = sys.measure();
+    drift = displacement_by_id<typename decltype(make())::execution_space>(
+        x0, positions_by_id(sys.particles()), sys.box());
     if (reversal_residual) {
       sys.step(strain_steps + relax_steps);
       reference2 = sys.measure();
@@ -170,7 +177,7 @@ Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strai
   }
   for (int m = 0; m < 3; ++m) {
     auto sys = make();
-    r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps);
+    r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps, drift);
     r[m].before = reference;
     if (m == 0 && reversal_residual) {
       probe_strain(sys, modes[m], -1, amplitude, strain_steps, relax_steps);

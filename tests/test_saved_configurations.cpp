@@ -32,7 +32,7 @@ rotational = 20.0
 [probe]
 amplitude = 3.0e-6
 strain_steps = 200
-relax_steps = 400
+relax_steps = 200
 [run]
 dt = 0.004
 skin = 0.2
@@ -53,7 +53,7 @@ phi_max = 0.72
 volumetric_strain_rate = 2.0e-2
 targets = [0.68]
 relax_ratio = 1.0e-6
-relax_max_steps = 5000
+relax_max_steps = 2000
 )";
 
 // As the CLI does: the `scene` key picks the driver before the driver reads the rest.
@@ -166,7 +166,7 @@ TEST(SavedConfigurations, ProbingALoadedConfigurationGivesTheInRunModuliBitwise)
   const Frictional model{
       LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, inf, inf), {}};
   auto sys = restart_system<DemSystem<Exec, Frictional>>(c, model, prm);
-  const Moduli fresh = probe_moduli(sys, 3e-6, 200, 400);
+  const Moduli fresh = probe_moduli(sys, 3e-6, 200, 200);
   double dbar = 0;
   for (double a : c.particles.radius) dbar += 2 * a / c.size();
   EXPECT_NE(fresh.G * dbar / 1e5, with);
