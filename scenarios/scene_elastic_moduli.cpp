@@ -342,7 +342,8 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   std::map<std::string, std::vector<double>> sw;
   for (double a : s.amplitudes) {
     const long n = steps_for(s, a, base_rate);
-    const Moduli mod = probe_config(c, probe_base, s.params, a, n, s.probe_relax, nullptr);
+    double reversal = 0;
+    const Moduli mod = probe_config(c, probe_base, s.params, a, n, s.probe_relax, &reversal);
     const double vals[] = {a,
                            mod.K * scale,
                            mod.G * scale,
@@ -351,9 +352,11 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
                            mod.eta_G,
                            mod.eta_M,
                            a / (n * s.params.dt) * inertia_scale,
-                           static_cast<double>(n)};
-    const char* names[] = {"amplitude", "K_star", "G_star",          "M_star",      "eta_K",
-                           "eta_G",     "eta_M",  "inertial_number", "strain_steps"};
+                           static_cast<double>(n),
+                           reversal};
+    const char* names[] = {
+        "amplitude", "K_star", "G_star",          "M_star",       "eta_K",
+        "eta_G",     "eta_M",  "inertial_number", "strain_steps", "reversal_residual"};
     for (size_t q = 0; q < std::size(vals); ++q) sw[names[q]].push_back(vals[q]);
     std::cerr << "  sweep amplitude " << a << ": K* " << mod.K * scale << "  G* " << mod.G * scale
               << "  M* " << mod.M * scale << "\n";

@@ -71,12 +71,16 @@ if sweeps:
         for m, mk in (("K", "o-"), ("G", "s--"), ("M", "^:")):
             axes[0].loglog(s["amplitude"], np.abs(s[m + "_star"]), mk, color=c, ms=4,
                            label="%s* %s" % (m, name))
-        axes[1].loglog(s["amplitude"], s["eta_K"], "o-", color=c, ms=4, label=name)
+        axes[1].loglog(s["amplitude"], s["eta_K"], "o-", color=c, ms=4, label="eta, " + name)
+        if "reversal_residual" in s:
+            axes[1].loglog(s["amplitude"], np.abs(s["reversal_residual"]), "x--", color=c,
+                           ms=5, label="|reversal residual|, " + name)
     axes[0].set_xlabel("probe strain amplitude")
     axes[0].set_ylabel("secant modulus (dimensionless)")
     axes[0].legend(fontsize=6)
     axes[1].set_xlabel("probe strain amplitude")
-    axes[1].set_ylabel("non-affine fluctuation eta (isotropic probe)")
+    axes[1].set_ylabel("isotropic probe: eta, |reversal residual|")
+    axes[1].legend(fontsize=6)
     save(fig, outdir, "moduli_vs_amplitude.png")
 
 sizes = np.unique(t["particles"])
