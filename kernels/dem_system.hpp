@@ -43,6 +43,10 @@ struct StepProfile {
 template <class ExecSpace, class Model>
 class DemSystem {
  public:
+  using execution_space = ExecSpace;
+  using model_type = Model;
+  using particles_type = Particles<ExecSpace>;
+
   DemSystem(Particles<ExecSpace> particles, const PeriodicBox& box, const Model& model,
             const DemParams& params)
       : p_(std::move(particles)), box_(box), model_(model), params_(params), nl_(params.skin) {

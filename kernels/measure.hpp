@@ -136,3 +136,100 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
 }
 
 }  // namespace granular
+
+namespace granular {
+
+// Positions by particle identity (row id(i) = x(i)), a reference that survives reordering.
+template <class ExecSpace>
+typename Particles<ExecSpace>::vec_view positions_by_id(const Particles<ExecSpace>& p) {
+  typename Particles<ExecSpace>::vec_view out("measure::positions_by_id", p.n);
+  auto x = p.x;
+  auto id = p.id;
+  Kokkos::parallel_for(
+      "dem::positions_by_id", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+        for (int d = 0; d < 3; ++d) out(id(i), d) = x(i, d);
+      });
+  return out;
+}
+
+struct NonAffine {
+  double eta = 0;        // (1/M) sum_c |Delta| / |eps l|  (contacts with eps l != 0)
+  double eta_ratio = 0;  // sum_c |Delta| / sum_c |eps l|
+  double contacts = 0;   // M
+};
+
+// Displacements by identity from positions x0 to x1 (both by identity, same box).
+template <class ExecSpace>
+typename Particles<ExecSpace>::vec_view displacement_by_id(
+    const typename Particles<ExecSpace>::vec_view& x0,
+    const typename Particles<ExecSpace>::vec_view& x1, const PeriodicBox& box) {
+  typename Particles<ExecSpace>::vec_view out("measure::displacement", x0.extent(0));
+  const PeriodicBox b = box;
+  Kokkos::parallel_for(
+      "dem::displacement_by_id", Kokkos::RangePolicy<ExecSpace>(0, x0.extent(0)),
+      KOKKOS_LAMBDA(const int i) {
+        for (int d = 0; d < 3; ++d) out(i, d) = b.min_image(x1(i, d) - x0(i, d), d);
+      });
+  return out;
+}
+
+// Non-affine displacement fluctuation of the contacts of the current state relative to a
+// reference (positions x0 by identity in box0; the box deformed about its lower corner).
+// An optional `drift` (displacement by identity that the state makes without strain in
+// the same time) is subtracted from every particle's displacement first.
+// Each particle's non-affine displacement is u_i = x_i - A(x0_i), A the affine map
+// x -> lo + (x - lo) L/L0; for a contact Delta = u_i - u_j is the relative displacement
+// minus its affine part eps l, with eps = L/L0 - 1 per axis and l the branch vector.
+template <class ExecSpace>
+NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                                const PeriodicBox& box, const PeriodicBox& box0,
+                                const typename Particles<ExecSpace>::vec_view& x0,
+                                const typename Particles<ExecSpace>::vec_view& drift = {}) {
+  const bool has_drift = drift.extent(0) == static_cast<size_t>(p.n);
+  using mem = typename ExecSpace::memory_space;
+  Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::nonaffine", p.n, 4);
+  const ParticleViews<ExecSpace> pv(p);
+  auto offsets = nl.offsets(), neighbors = nl.neighbors();
+  const PeriodicBox b = box;
+  const double s[3] = {box.len[0] / box0.len[0], box.len[1] / box0.len[1],
+                       box.len[2] / box0.len[2]};
+  Kokkos::parallel_for(
+      "dem::measure::nonaffine", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
+        double sum_d = 0, sum_e = 0, sum_ratio = 0, m = 0;
+        const Body bi = load_body(pv, i, false);
+        const int idi = pv.id(i);
+        for (int k = offsets(i); k < offsets(i + 1); ++k) {
+          const int j = neighbors(k);
+          const int idj = pv.id(j);
+          if (idj < idi) continue;  // each contact once
+          double rx, ry, rz, r2;
+          if (!touching(pv, b, bi, j, rx, ry, rz, r2)) continue;
+          const double l[3] = {rx, ry, rz};
+          double dd = 0, ee = 0;
+          for (int d = 0; d < 3; ++d) {
+            const double di = has_drift ? drift(idi, d) : 0.0;
+            const double dj = has_drift ? drift(idj, d) : 0.0;
+            const double ui =
+                b.min_image(pv.x(i, d) - b.lo[d] - (x0(idi, d) - b.lo[d]) * s[d] - di, d);
+            const double uj =
+                b.min_image(pv.x(j, d) - b.lo[d] - (x0(idj, d) - b.lo[d]) * s[d] - dj, d);
+            const double el = (s[d] - 1.0) * l[d];
+            dd += (ui - uj) * (ui - uj);
+            ee += el * el;
+          }
+          dd = Kokkos::Experimental::sqrt(dd), ee = Kokkos::Experimental::sqrt(ee);
+          sum_d += dd, sum_e += ee, m += 1.0;
+          if (ee > 0) sum_ratio += dd / ee;
+        }
+        per(i, 0) = sum_d, per(i, 1) = sum_e, per(i, 2) = sum_ratio, per(i, 3) = m;
+      });
+  const auto sums = deterministic_column_sums<4, ExecSpace>(per, p.n);
+  NonAffine out;
+  out.contacts = sums[3];
+  out.eta = sums[3] > 0 ? sums[2] / sums[3] : 0.0;
+  out.eta_ratio = sums[1] > 0 ? sums[0] / sums[1] : 0.0;
+  return out;
+}
+
+}  // namespace granular

@@ -14,9 +14,13 @@ namespace granular {
 
 // Strains the box isotropically at `rate` (per axis, signed) until phi crosses `target`;
 // calls `sample` every `every` steps. Returns the steps taken.
+// With `rate_of`, the rate is re-chosen from each sample (e.g. for a target inertial
+// number); it must keep the sign of `rate`.
 template <class System>
 long strain_to_phi(System& sys, double target, double rate, long every,
-                   const std::function<void(const Measurements&)>& sample) {
+                   const std::function<void(const Measurements&)>& sample,
+                   const std::function<double(const Measurements&)>& rate_of = nullptr) {
+  if (rate_of) rate = rate_of(sys.measure());
   sys.set_strain_rate(rate, rate, rate);
   long steps = 0;
   const bool compress = rate < 0;
@@ -31,6 +35,10 @@ long strain_to_phi(System& sys, double target, double rate, long every,
     const Measurements m = sys.measure();
     sys.check_health(m);
     if (sample) sample(m);
+    if (rate_of) {
+      rate = rate_of(m);
+      sys.set_strain_rate(rate, rate, rate);
+    }
   }
   sys.set_strain_rate(0, 0, 0);
   return steps;
@@ -54,7 +62,73 @@ double relax(System& sys, double ratio, long max_steps, long every = 500) {
 struct Moduli {
   double K = 0, G = 0, M = 0;                 // bulk, shear, P-wave (uniaxial) moduli
   double K_n = 0, K_t = 0, G_n = 0, G_t = 0;  // from normal / tangential contact forces
+  // Non-affine displacement fluctuation at the end of each loading probe, as
+  // sum_c |Delta| / sum_c |eps l| (defined for every mode), and for the isotropic probe also
+  // the per-contact mean (1/M) sum_c |Delta| / |eps l| (there eps l never vanishes).
+  double eta_K = 0, eta_G = 0, eta_M = 0, eta_K_per_contact = 0;
 };
+
+// One probing mode: the state before, the state after straining and relaxing, the true
+// strains applied, and the non-affine fluctuation of the contacts at the end.
+struct ModeResult {
+  Measurements before, after;
+  std::array<double, 3> eps{};
+  NonAffine na;
+};
+
+// Strains the box by sign * amplitude * pattern (compressive true strain per axis) in
+// `strain_steps` steps, then relaxes `relax_steps` at fixed box.
+template <class System>
+void probe_strain(System& sys, const std::array<double, 3>& pattern, double sign, double amplitude,
+                  long strain_steps, long relax_steps) {
+  const double dt = sys.params().dt;
+  double rate[3];
+  for (int d = 0; d < 3; ++d)
+    rate[d] = std::expm1(-sign * amplitude * pattern[d] / strain_steps) / dt;
+  sys.set_strain_rate(rate[0], rate[1], rate[2]);
+  sys.step(strain_steps);
+  sys.set_strain_rate(0, 0, 0);
+  sys.step(relax_steps);
+}
+
+template <class System>
+ModeResult probe_mode(System& sys, const std::array<double, 3>& pattern, double amplitude,
+                      long strain_steps, long relax_steps,
+                      const typename System::particles_type::vec_view& drift = {}) {
+  ModeResult r;
+  const PeriodicBox box0 = sys.box();
+  const auto x0 = positions_by_id(sys.particles());
+  r.before = sys.measure();
+  probe_strain(sys, pattern, +1, amplitude, strain_steps, relax_steps);
+  r.after = sys.measure();
+  r.na = nonaffine_fluctuation(sys.particles(), sys.neighbor_list(), sys.box(), box0, x0, drift);
+  for (int d = 0; d < 3; ++d) r.eps[d] = -std::log(sys.box().len[d] / box0.len[d]);
+  return r;
+}
+
+// K from the isotropic mode, G from pure shear (compress x, stretch y), M from uniaxial x.
+inline Moduli moduli_from(const ModeResult& iso, const ModeResult& shear, const ModeResult& uni) {
+  Moduli out;
+  auto p = [](const double* s) { return (s[0] + s[1] + s[2]) / 3.0; };
+  auto d = [](const double* s) { return s[0] - s[1]; };
+  const Measurements &a = iso.before, &b = iso.after;
+  const double ev = iso.eps[0] + iso.eps[1] + iso.eps[2];
+  out.K = (b.pressure - a.pressure) / ev;
+  out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
+  out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
+  out.eta_K = iso.na.eta_ratio, out.eta_K_per_contact = iso.na.eta;
+  const Measurements &c = shear.before, &e = shear.after;
+  const double ed = 2 * (shear.eps[0] - shear.eps[1]);
+  out.G = (d(e.stress) - d(c.stress)) / ed;
+  out.G_n = (d(e.stress_normal) - d(c.stress_normal)) / ed;
+  out.G_t = (d(e.stress_tangential) - d(c.stress_tangential)) / ed;
+  out.eta_G = shear.na.eta_ratio;
+  out.M = (uni.after.stress[0] - uni.before.stress[0]) / uni.eps[0];
+  out.eta_M = uni.na.eta_ratio;
+  return out;
+}
+
+const std::array<double, 3> kIsotropic = {1, 1, 1}, kPureShear = {1, -1, 0}, kUniaxial = {1, 0, 0};
 
 // Probes a relaxed system in place, keeping its contact history: for each mode (isotropic,
 // pure shear compressing x and stretching y, uniaxial along x) strain by `amplitude`
@@ -63,47 +137,55 @@ struct Moduli {
 template <class System>
 Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax_steps,
                     double* reversal_residual = nullptr) {
-  const double dt = sys.params().dt;
-  auto strain = [&](const std::array<double, 3>& pattern, double sign) {
-    double rate[3];
-    for (int d = 0; d < 3; ++d)
-      rate[d] = std::expm1(-sign * amplitude * pattern[d] / strain_steps) / dt;
-    sys.set_strain_rate(rate[0], rate[1], rate[2]);
-    sys.step(strain_steps);
-    sys.set_strain_rate(0, 0, 0);
-    sys.step(relax_steps);
-  };
-  auto run = [&](const std::array<double, 3>& pattern, Measurements& before, Measurements& after,
-                 std::array<double, 3>& eps) {
-    const PeriodicBox box0 = sys.box();
-    before = sys.measure();
-    strain(pattern, +1);
-    after = sys.measure();
-    for (int d = 0; d < 3; ++d) eps[d] = -std::log(sys.box().len[d] / box0.len[d]);
-    strain(pattern, -1);
-  };
-  Moduli out;
-  Measurements a, b;
-  std::array<double, 3> e;
-  auto p = [](const double* s) { return (s[0] + s[1] + s[2]) / 3.0; };
-  run({1, 1, 1}, a, b, e);
-  const double ev = e[0] + e[1] + e[2];
-  out.K = (b.pressure - a.pressure) / ev;
-  out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
-  out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
-  if (reversal_residual)
-    *reversal_residual = (sys.measure().pressure - a.pressure) / (b.pressure - a.pressure);
-  run({1, -1, 0}, a, b, e);
-  const double ed = 2 * (e[0] - e[1]);
-  out.G = ((b.stress[0] - b.stress[1]) - (a.stress[0] - a.stress[1])) / ed;
-  out.G_n =
-      ((b.stress_normal[0] - b.stress_normal[1]) - (a.stress_normal[0] - a.stress_normal[1])) / ed;
-  out.G_t = ((b.stress_tangential[0] - b.stress_tangential[1]) -
-             (a.stress_tangential[0] - a.stress_tangential[1])) /
-            ed;
-  run({1, 0, 0}, a, b, e);
-  out.M = (b.stress[0] - a.stress[0]) / e[0];
-  return out;
+  ModeResult r[3];
+  const std::array<double, 3> modes[3] = {kIsotropic, kPureShear, kUniaxial};
+  for (int m = 0; m < 3; ++m) {
+    r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps);
+    probe_strain(sys, modes[m], -1, amplitude, strain_steps, relax_steps);
+    if (m == 0 && reversal_residual)
+      *reversal_residual = (sys.measure().pressure - r[0].before.pressure) /
+                           (r[0].after.pressure - r[0].before.pressure);
+  }
+  return moduli_from(r[0], r[1], r[2]);
+}
+
+// Probes a state that `make()` restores afresh for every mode (a saved configuration), so
+// the modes do not disturb one another. A reference run from the same state without
+// strain, as long as a probe, gives the stress the state would reach on its own (residual
+// relaxation): stress increments are taken against it, which removes that drift from the
+// moduli; the particle displacements of that run are likewise subtracted before the
+// non-affine fluctuation is computed. The isotropic probe is then reversed for the
+// reversal test.
+template <class Factory>
+Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strain_steps,
+                               long relax_steps, double* reversal_residual = nullptr) {
+  ModeResult r[3];
+  const std::array<double, 3> modes[3] = {kIsotropic, kPureShear, kUniaxial};
+  Measurements reference, reference2;  // after one and after two probe durations
+  typename decltype(make())::particles_type::vec_view drift;
+  {
+    auto sys = make();
+    const auto x0 = positions_by_id(sys.particles());
+    sys.step(strain_steps + relax_steps);
+    reference = sys.measure();
+    drift = displacement_by_id<typename decltype(make())::execution_space>(
+        x0, positions_by_id(sys.particles()), sys.box());
+    if (reversal_residual) {
+      sys.step(strain_steps + relax_steps);
+      reference2 = sys.measure();
+    }
+  }
+  for (int m = 0; m < 3; ++m) {
+    auto sys = make();
+    r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps, drift);
+    r[m].before = reference;
+    if (m == 0 && reversal_residual) {
+      probe_strain(sys, modes[m], -1, amplitude, strain_steps, relax_steps);
+      *reversal_residual = (sys.measure().pressure - reference2.pressure) /
+                           (r[0].after.pressure - reference.pressure);
+    }
+  }
+  return moduli_from(r[0], r[1], r[2]);
 }
 
 }  // namespace granular

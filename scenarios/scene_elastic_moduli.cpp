@@ -1,17 +1,26 @@
 // Scene `elastic_moduli`: the preparation protocol of dem.md section 6 (gas -> compress to
-// phi_0 -> relax -> compress to phi_max -> decompress), configurations saved on the
-// unloading branch at the listed volume fractions and relaxed, then elastic probing of
-// each (sliding switched off unless the scene keeps friction): K*, G*, M* against phi Z
-// next to effective-medium and fluctuation theory, in a table, a chart and summary.json.
+// phi_0 -> relax -> compress to phi_max -> decompress), configurations saved on the chosen
+// branch at the listed volume fractions, relaxed and written as restartable HDF5 files
+// (configs/), then elastic probing of each (sliding switched off unless the scene keeps
+// friction): K*, G*, M*, partitions, non-affine fluctuation and inertial numbers against
+// phi Z next to effective-medium and fluctuation theory, in a table, charts and summary.json.
+// One driver covers the studies through scene keys: preparation friction list, ensembles
+// of sizes and seeds, probing tangential stiffness list, amplitude sweeps, the rate and
+// amplitude halving check, and probing saved configurations ([start] from).
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
 #include <iostream>
 #include <limits>
+#include <map>
 
 #include "core/output.hpp"
 #include "core/progress.hpp"
+#include "scenarios/config_state.hpp"
 #include "scenarios/contact_config.hpp"
-#include "scenarios/dem_output.hpp"
 #include "scenarios/element_test.hpp"
 #include "scenarios/moduli_theory.hpp"
 #include "scenarios/packing.hpp"
@@ -21,158 +30,521 @@ namespace granular {
 
 namespace {
 using Exec = Kokkos::DefaultExecutionSpace;
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// The same contact model with infinite friction: elastic probing must not slide.
+// The same contact model with another friction coefficient (infinity: no sliding).
 template <class Model>
-Model without_sliding(Model m) {
+Model with_friction(Model m, double mu) {
   if constexpr (Model::tangential_type::active) {
-    const double inf = std::numeric_limits<double>::infinity();
     for (auto& row : m.tangential.table.p)
-      for (auto& q : row) q.mu_s = q.mu_d = inf;
+      for (auto& q : row) q.mu_s = q.mu_d = mu;
   }
   return m;
 }
-}  // namespace
 
-void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
+// The same contact model with another (constant) tangential spring stiffness.
+template <class Model>
+Model with_tangential_stiffness(Model m, double kt) {
+  if constexpr (Model::tangential_type::active) {
+    for (auto& row : m.tangential.table.p)
+      for (auto& q : row) q.kt = kt;
+  }
+  return m;
+}
+
+// One preparation of the protocol: its size, seed and friction.
+struct PrepVariant {
+  int count = 0;
+  std::uint64_t seed = 1;
+  double mu = kNaN;  // preparation friction (NaN: as in [contact])
+  std::string tag;   // subdirectory of configs/ and label in the table ("" if only one)
+};
+
+struct Setup {
   GasSpec gas;
-  gas.count = static_cast<int>(scene.integer("particles.count"));
-  gas.diameter_min = scene.real("particles.diameter_min");
-  gas.diameter_max = scene.real("particles.diameter_max");
-  gas.density = scene.real("particles.density");
-  gas.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
-  gas.speed = scene.real("particles.initial_speed", 0.0);
-  gas.phi = scene.real("preparation.phi_gas", 0.3);
-  const ContactConfig contact = ContactConfig::read(scene);
+  ContactConfig contact;
   DemParams params;
-  params.dt = scene.real("run.dt");
-  params.skin = scene.real("run.skin");
-  params.damping.translational = scene.real("damping.background", 0.0);
-  params.damping.rotational = scene.real("damping.rotational", 0.0);
-  params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
-  params.max_overlap = scene.real("run.max_overlap", 0.5);
-  const double phi0 = scene.real("preparation.phi_0", 0.5);
-  const double phi_max = scene.real("preparation.phi_max");
-  const double rate = scene.real("preparation.volumetric_strain_rate");
-  const auto targets = scene.reals("preparation.unloading_targets");
-  const double relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
-  const long relax_max = scene.integer("preparation.relax_max_steps", 200000);
-  const double amplitude = scene.real("probe.amplitude", 3e-6);
-  const long strain_steps = scene.integer("probe.strain_steps", 2000);
-  const long probe_relax = scene.integer("probe.relax_steps", 2000);
-  const bool keep_friction = scene.flag("probe.keep_friction", false);
-  scene.require(phi0 > gas.phi && phi_max > phi0 && phi_max < 1, "preparation.phi_max",
-                "must satisfy phi_gas < phi_0 < phi_max < 1");
-  for (double t : targets)
-    scene.require(t > phi0 && t < phi_max, "preparation.unloading_targets",
-                  "must lie between phi_0 and phi_max");
-  scene.require(rate > 0, "preparation.volumetric_strain_rate", "must be positive");
-  scene.require(amplitude > 0 && amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
-  scene.reject_unknown_keys();
-  make_directories(opts.out_dir);
+  std::vector<PrepVariant> variants;
+  std::string start_from;  // probe this saved configuration instead of preparing
+  double phi0 = 0.5, phi_max = 0.82, rate = 0, min_rate = 0, prep_inertial = 0;
+  bool loading_branch = false;
+  std::vector<double> targets;
+  double relax_ratio = 1e-8;
+  long relax_max = 200000;
+  double amplitude = 3e-6, probe_inertial = 0;
+  long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
+  bool keep_friction = false, halving = false;
+  std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
+  std::vector<double> amplitudes;  // amplitude sweep (empty: none)
+};
 
-  const double axis_rate = rate / 3;
+Setup read_setup(const SceneFile& scene) {
+  Setup s;
+  s.start_from = scene.text("start.from", "");
+  s.contact = ContactConfig::read(scene);
+  s.params.dt = scene.real("run.dt");
+  s.params.skin = scene.real("run.skin");
+  s.params.damping.translational = scene.real("damping.background", 0.0);
+  s.params.damping.rotational = scene.real("damping.rotational", 0.0);
+  s.params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
+  s.params.max_overlap = scene.real("run.max_overlap", 0.5);
+  s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
+  s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
+  s.amplitude = scene.real("probe.amplitude", 3e-6);
+  s.strain_steps = scene.integer("probe.strain_steps", 2000);
+  s.probe_relax = scene.integer("probe.relax_steps", 2000);
+  s.probe_inertial = scene.real("probe.inertial_number", 0.0);
+  s.max_strain_steps = scene.integer("probe.max_strain_steps", 200000);
+  s.keep_friction = scene.flag("probe.keep_friction", false);
+  s.halving = scene.flag("probe.halving_check", false);
+  s.kt_ratios = scene.reals("probe.kt_over_kn", {});
+  s.amplitudes = scene.reals("probe.amplitudes", {});
+  scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
+  scene.require(s.strain_steps > 0 && s.probe_relax >= 0, "probe.strain_steps",
+                "and probe.relax_steps must be positive");
+  scene.require(s.probe_inertial >= 0 && s.probe_inertial < 1e-2, "probe.inertial_number",
+                "must be in [0, 1e-2) (quasi-static probing: 1e-4 ... 1e-6)");
+  for (double a : s.amplitudes)
+    scene.require(a > 0 && a <= 0.05, "probe.amplitudes", "must lie in (0, 0.05]");
+  for (double r : s.kt_ratios) scene.require(r >= 0, "probe.kt_over_kn", "must not be negative");
+  if (!s.kt_ratios.empty())
+    scene.require(s.contact.tangential == "coulomb" && s.contact.coulomb.law == 0 &&
+                      s.contact.normal != "hertz",
+                  "probe.kt_over_kn",
+                  "needs a linear or hysteretic normal law with a constant tangential spring");
+  if (!s.start_from.empty()) {
+    s.variants.push_back({});
+    scene.reject_unknown_keys();
+    return s;
+  }
+  GasSpec& g = s.gas;
+  g.count = static_cast<int>(scene.integer("particles.count", 0));
+  g.diameter_min = scene.real("particles.diameter_min");
+  g.diameter_max = scene.real("particles.diameter_max");
+  g.density = scene.real("particles.density");
+  g.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
+  g.speed = scene.real("particles.initial_speed", 0.0);
+  g.phi = scene.real("preparation.phi_gas", 0.3);
+  s.phi0 = scene.real("preparation.phi_0", 0.5);
+  s.phi_max = scene.real("preparation.phi_max");
+  s.rate = scene.real("preparation.volumetric_strain_rate");
+  s.prep_inertial = scene.real("preparation.inertial_number", 0.0);
+  s.min_rate = scene.real("preparation.min_volumetric_strain_rate", s.rate / 20);
+  const std::string branch = scene.text("preparation.branch", "unloading");
+  scene.require(branch == "unloading" || branch == "loading", "preparation.branch",
+                "must be \"unloading\" (decompression from phi_max) or \"loading\"");
+  s.loading_branch = branch == "loading";
+  s.targets = scene.reals("preparation.targets");
+  scene.require(s.phi0 > g.phi && s.phi_max > s.phi0 && s.phi_max < 1, "preparation.phi_max",
+                "must satisfy phi_gas < phi_0 < phi_max < 1");
+  for (double t : s.targets)
+    scene.require(t > s.phi0 && t < s.phi_max, "preparation.targets",
+                  "must lie between phi_0 and phi_max");
+  scene.require(s.rate > 0, "preparation.volumetric_strain_rate", "must be positive");
+  scene.require(s.min_rate > 0 && s.min_rate <= s.rate, "preparation.min_volumetric_strain_rate",
+                "must be in (0, preparation.volumetric_strain_rate]");
+  // Preparation variants: sizes x seeds x friction coefficients.
+  std::vector<double> counts = scene.reals("ensemble.counts", {});
+  std::vector<double> seeds = scene.reals("ensemble.seeds", {});
+  const std::vector<double> mus = scene.reals("preparation.mu", {});
+  if (counts.empty()) counts.push_back(g.count);
+  if (seeds.empty()) seeds.push_back(static_cast<double>(g.seed));
+  for (double c : counts) scene.require(c >= 2, "particles.count", "(or ensemble.counts) >= 2");
+  for (double m : mus) scene.require(m >= 0, "preparation.mu", "must not be negative");
+  if (!mus.empty())
+    scene.require(s.contact.tangential == "coulomb", "preparation.mu",
+                  "needs contact.tangential = \"coulomb\"");
+  const std::vector<double> mu_list = mus.empty() ? std::vector<double>{kNaN} : mus;
+  for (double c : counts)
+    for (double sd : seeds)
+      for (double mu : mu_list) {
+        PrepVariant v;
+        v.count = static_cast<int>(c), v.seed = static_cast<std::uint64_t>(sd), v.mu = mu;
+        char buf[96] = "";
+        if (counts.size() > 1 || seeds.size() > 1)
+          std::snprintf(buf, sizeof buf, "N%d_seed%d", v.count, static_cast<int>(sd));
+        if (mus.size() > 1)
+          std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), "%smu%g",
+                        buf[0] ? "_" : "", mu);
+        v.tag = buf;
+        s.variants.push_back(v);
+      }
+  scene.reject_unknown_keys();
+  return s;
+}
+
+// Mean diameter, density and size moment D = <d^2>/<d^3> dbar of a configuration.
+struct SizeStats {
+  double dbar = 0, density = 0, D = 0;
+};
+SizeStats size_stats(const ConfigState& c) {
+  double s1 = 0, s2 = 0, s3 = 0, rho = 0;
+  const int n = c.size();
+  for (int i = 0; i < n; ++i) {
+    const double d = 2 * c.particles.radius[i];
+    s1 += d, s2 += d * d, s3 += d * d * d, rho += c.particles.density[i];
+  }
+  return {s1 / n, rho / n, s2 / s3 * s1 / n};
+}
+
+// Mean normal tangent stiffness dF/d(delta) over the contacts of a configuration (the k_n
+// of the dimensionless moduli): k_n (linear), k2 (hysteretic, the un/reloading branch),
+// 1.5 K sqrt(L delta) (Hertz). Host code, all pairs: it runs once per configuration.
+double mean_normal_stiffness(const ConfigState& c, const ContactConfig& cc) {
+  if (cc.normal == "linear") return cc.linear.kn;
+  if (cc.normal == "hysteretic") return cc.hysteretic.k2;
+  const HostParticles& p = c.particles;
+  double sum = 0, count = 0;
+  for (int i = 0; i < c.size(); ++i)
+    for (int j = i + 1; j < c.size(); ++j) {
+      const double r[3] = {c.box.min_image(p.x[i] - p.x[j], 0), c.box.min_image(p.y[i] - p.y[j], 1),
+                           c.box.min_image(p.z[i] - p.z[j], 2)};
+      const double ai = p.radius[i], aj = p.radius[j];
+      const double delta = ai + aj - std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+      if (delta <= 0) continue;
+      const double L = cc.hertz.reduced_radius ? ai * aj / (ai + aj) : ai + aj;
+      sum += 1.5 * cc.hertz.K * std::sqrt(L * delta), count += 1;
+    }
+  return count > 0 ? sum / count : kNaN;
+}
+
+// Tangential over normal tangent stiffness of the probing model, for the theories.
+double stiffness_ratio(const ContactConfig& cc, double kn_mean, double kt_override) {
+  if (cc.tangential != "coulomb") return 0.0;
+  if (kt_override >= 0) return kt_override;
+  if (cc.coulomb.law == 0) return cc.coulomb.kt / kn_mean;
+  // Mindlin spring kt sqrt(L delta) against Hertz 1.5 K sqrt(L delta), the same L.
+  return cc.normal == "hertz" ? cc.coulomb.kt / (1.5 * cc.hertz.K) : kNaN;
+}
+
+// Strain steps that give an axial probing rate I sqrt(P / rho) / dbar (inertial number I).
+long steps_for(const Setup& s, double amplitude, double base_rate) {
+  const double steps = amplitude / (base_rate * s.params.dt);
+  return std::clamp(static_cast<long>(std::ceil(steps)), 20L, s.max_strain_steps);
+}
+
+// Probes a saved configuration: each mode restarts from it, so probes do not disturb one
+// another and give bitwise the same result whether the state is in memory or read back.
+template <class Model>
+Moduli probe_config(const ConfigState& c, const Model& model, const DemParams& params,
+                    double amplitude, long steps, long relax, double* reversal) {
+  auto make = [&] { return restart_system<DemSystem<Exec, Model>>(c, model, params); };
+  return probe_moduli_restarting(make, amplitude, steps, relax, reversal);
+}
+
+double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }
+
+struct Outputs {
+  Json rows = Json::array();
+  Json sweeps = Json::array();
+  std::map<std::string, std::vector<double>> table;
+  std::map<std::string, std::vector<double>> prep;  // preparation series
+  std::vector<std::pair<std::string, std::vector<double>>> sweep_data;
+};
+
+// Everything measured on one configuration; rows appended to `out`.
+template <class Model>
+void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
+             const std::map<std::string, double>& context, const std::string& tag, Outputs& out) {
+  const SizeStats st = size_stats(c);
+  const double kn = mean_normal_stiffness(c, s.contact);
+  const double scale = st.dbar / kn;
+  Measurements m;
+  {
+    auto sys = restart_system<DemSystem<Exec, Model>>(c, prep_model, s.params);
+    m = sys.measure();
+  }
+  const double P = m.pressure;
+  const double inertia_scale = P > 0 ? st.dbar * std::sqrt(st.density / P) : kNaN;
+  // Axial probing rate: from the target inertial number, else amplitude / strain_steps.
+  const double base_rate = s.probe_inertial > 0 && P > 0
+                               ? s.probe_inertial / inertia_scale
+                               : s.amplitude / (s.strain_steps * s.params.dt);
+  const long steps = s.probe_inertial > 0 ? steps_for(s, s.amplitude, base_rate) : s.strain_steps;
+  const double probe_I = s.amplitude / (steps * s.params.dt) * inertia_scale;
+  const Model probe_base = s.keep_friction ? prep_model : with_friction(prep_model, INFINITY);
+  const std::vector<double> ratios = s.kt_ratios.empty() ? std::vector<double>{-1} : s.kt_ratios;
+  for (double ratio : ratios) {
+    const Model model = ratio >= 0 ? with_tangential_stiffness(probe_base, ratio * kn) : probe_base;
+    double reversal = 0;
+    const Moduli mod =
+        probe_config(c, model, s.params, s.amplitude, steps, s.probe_relax, &reversal);
+    std::map<std::string, double> row = context;
+    const double kt_kn = stiffness_ratio(s.contact, kn, ratio);
+    TheoryInput ti;
+    ti.phi = m.phi, ti.z = m.z_corrected, ti.chi = m.chi, ti.kt_kn = kt_kn, ti.D = st.D;
+    const TheoryResult th = moduli_theory(ti);
+    ti.chi = -1;
+    const TheoryResult thc = moduli_theory(ti);
+    double dK_a = kNaN, dG_a = kNaN, dM_a = kNaN, dK_r = kNaN, dG_r = kNaN, dM_r = kNaN;
+    if (s.halving) {  // half the amplitude at the same rate; the same amplitude at half the rate
+      const Moduli ha = probe_config(c, model, s.params, s.amplitude / 2, std::max(1L, steps / 2),
+                                     s.probe_relax, nullptr);
+      const Moduli hr =
+          probe_config(c, model, s.params, s.amplitude, 2 * steps, s.probe_relax, nullptr);
+      dK_a = rel_change(ha.K, mod.K), dG_a = rel_change(ha.G, mod.G),
+      dM_a = rel_change(ha.M, mod.M);
+      dK_r = rel_change(hr.K, mod.K), dG_r = rel_change(hr.G, mod.G),
+      dM_r = rel_change(hr.M, mod.M);
+    }
+    const std::map<std::string, double> values = {
+        {"particles", static_cast<double>(c.size())},
+        {"phi", m.phi},
+        {"z_corrected", m.z_corrected},
+        {"chi", m.chi},
+        {"rattler_fraction", m.rattlers / c.size()},
+        {"pressure_star", m.pressure * scale},
+        {"kn_mean", kn},
+        {"kt_kn", kt_kn},
+        {"inertial_number_probe", probe_I},
+        {"probe_strain_steps", static_cast<double>(steps)},
+        {"K_star", mod.K * scale},
+        {"G_star", mod.G * scale},
+        {"M_star", mod.M * scale},
+        {"K_n_star", mod.K_n * scale},
+        {"K_t_star", mod.K_t * scale},
+        {"G_n_star", mod.G_n * scale},
+        {"G_t_star", mod.G_t * scale},
+        {"M_over_K_plus_4G_3", mod.M / (mod.K + 4 * mod.G / 3)},
+        {"isotropic_reversal_residual", reversal},
+        {"eta_K", mod.eta_K},
+        {"eta_G", mod.eta_G},
+        {"eta_M", mod.eta_M},
+        {"eta_K_per_contact", mod.eta_K_per_contact},
+        {"halving_amplitude_rel_change_K", dK_a},
+        {"halving_amplitude_rel_change_G", dG_a},
+        {"halving_amplitude_rel_change_M", dM_a},
+        {"halving_rate_rel_change_K", dK_r},
+        {"halving_rate_rel_change_G", dG_r},
+        {"halving_rate_rel_change_M", dM_r},
+        {"K_emt", th.K_emt},
+        {"G_emt", th.G_emt},
+        {"K_ft1", th.K_ft1},
+        {"G_ft1", th.G_ft1},
+        {"K_ft2", th.K_ft2},
+        {"G_ft2", th.G_ft2},
+        {"K_ft2_closure", thc.K_ft2},
+        {"G_ft2_closure", thc.G_ft2},
+        {"rho", th.rho},
+        {"zeta", th.zeta}};
+    row.insert(values.begin(), values.end());
+    Json r = Json::object();
+    r["tag"] = tag;
+    for (const auto& [k, v] : row) r[k] = v, out.table[k].push_back(v);
+    out.rows.push(r);
+    std::cerr << "phi " << m.phi << (ratio >= 0 ? "  kt/kn " + std::to_string(ratio) : "") << ": Z "
+              << m.z_corrected << "  K* " << mod.K * scale << "  G* " << mod.G * scale
+              << "  M/(K+4G/3) " << mod.M / (mod.K + 4 * mod.G / 3) << "  eta_K " << mod.eta_K
+              << "  I " << probe_I << "\n";
+  }
+  if (s.amplitudes.empty()) return;
+  // Amplitude sweep at the base probing rate (bounded step counts), from the same state.
+  std::map<std::string, std::vector<double>> sw;
+  for (double a : s.amplitudes) {
+    const long n = steps_for(s, a, base_rate);
+    double reversal = 0;
+    const Moduli mod = probe_config(c, probe_base, s.params, a, n, s.probe_relax, &reversal);
+    const double vals[] = {a,
+                           mod.K * scale,
+                           mod.G * scale,
+                           mod.M * scale,
+                           mod.eta_K,
+                           mod.eta_G,
+                           mod.eta_M,
+                           a / (n * s.params.dt) * inertia_scale,
+                           static_cast<double>(n),
+                           reversal};
+    const char* names[] = {
+        "amplitude", "K_star", "G_star",          "M_star",       "eta_K",
+        "eta_G",     "eta_M",  "inertial_number", "strain_steps", "reversal_residual"};
+    for (size_t q = 0; q < std::size(vals); ++q) sw[names[q]].push_back(vals[q]);
+    std::cerr << "  sweep amplitude " << a << ": K* " << mod.K * scale << "  G* " << mod.G * scale
+              << "  M* " << mod.M * scale << "\n";
+  }
+  char name[64];
+  std::snprintf(name, sizeof name, "phi_%.4f", c.phi);
+  const std::string group = "/sweep/" + (tag.empty() ? "" : tag + "_") + name;
+  Json j = Json::object();
+  j["tag"] = tag, j["phi"] = m.phi, j["z_corrected"] = m.z_corrected;
+  for (const auto& [k, v] : sw) {
+    j[k] = Json(v);
+    out.sweep_data.push_back({group + "/" + k, v});
+  }
+  out.sweeps.push(j);
+}
+
+// Runs the protocol for one variant, calling `on_config` with each relaxed configuration.
+template <class Model>
+void prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& out,
+             Progress& progress, long& done,
+             const std::function<void(const ConfigState&, double, double)>& on_config) {
+  GasSpec gas = s.gas;
+  gas.count = v.count, gas.seed = v.seed;
   PeriodicBox box;
   const HostParticles host = random_gas(gas, box);
-  // Size moment D = <d^2>/<d^3> * dbar for the theories.
-  double s1 = 0, s2 = 0, s3 = 0;
-  for (double a : host.radius) s1 += 2 * a, s2 += 4 * a * a, s3 += 8 * a * a * a;
-  const double dbar = s1 / host.size(), D = s2 / s3 * dbar;
-  const double kn_ref = contact.normal == "linear"       ? contact.linear.kn
-                        : contact.normal == "hysteretic" ? contact.hysteretic.k2
-                                                         : 0.0;
-  const double kt_kn = contact.tangential == "coulomb" && contact.coulomb.law == 0 && kn_ref > 0
-                           ? contact.coulomb.kt / kn_ref
-                           : 0.0;
+  double dsum = 0;
+  for (double a : host.radius) dsum += 2 * a;
+  const double dbar = dsum / host.size();
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, s.params);
+  double rate_now = s.rate;
+  // Volumetric rate for the target inertial number, within [min_rate, rate].
+  auto rate_of = [&](const Measurements& m) {
+    double r = s.rate;
+    if (s.prep_inertial > 0 && m.pressure > 0)
+      r = std::clamp(s.prep_inertial * std::sqrt(m.pressure / gas.density) / dbar, s.min_rate,
+                     s.rate);
+    return rate_now = r;
+  };
+  auto sample = [&](const Measurements& m) {
+    out.prep["phi"].push_back(m.phi), out.prep["pressure"].push_back(m.pressure);
+    out.prep["z_corrected"].push_back(m.z_corrected);
+    out.prep["volumetric_strain_rate"].push_back(rate_now);
+    out.prep["inertial_number"].push_back(
+        m.pressure > 0 ? rate_now * dbar * std::sqrt(gas.density / m.pressure) : kNaN);
+    out.prep["variant"].push_back(static_cast<double>(&v - s.variants.data()));
+  };
+  auto strain = [&](double target, double sign) {
+    std::function<double(const Measurements&)> f = nullptr;
+    if (s.prep_inertial > 0) f = [&, sign](const Measurements& m) { return sign * rate_of(m) / 3; };
+    strain_to_phi(sys, target, sign * s.rate / 3, 500, sample, f);
+  };
+  auto save = [&](double target, double sign) {
+    strain(target, sign);
+    const double ratio = relax(sys, s.relax_ratio, s.relax_max);
+    const Measurements m = sys.measure();
+    const double I = m.pressure > 0 ? rate_now * dbar * std::sqrt(gas.density / m.pressure) : kNaN;
+    on_config(snapshot(sys, host.density, m.pressure), ratio, I);
+    progress.update(++done);
+  };
+  strain(s.phi0, -1);  // 2. compress to phi_0
+  progress.update(++done);
+  relax(sys, s.relax_ratio, s.relax_max);  // 3. relax
+  progress.update(++done);
+  std::vector<double> sorted = s.targets;
+  if (s.loading_branch) {  // configurations on the way up (strongly cohesive samples)
+    std::sort(sorted.begin(), sorted.end());
+    for (double t : sorted) save(t, -1);
+    strain(s.phi_max, -1);
+    progress.update(++done);
+    return;
+  }
+  strain(s.phi_max, -1);  // 4. compress to phi_max
+  progress.update(++done);
+  std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
+  for (double t : sorted) save(t, +1);
+}
 
+}  // namespace
+
+void check_elastic_moduli(const SceneFile& scene) { read_setup(scene); }
+
+void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup s = read_setup(scene);
+  make_directories(opts.out_dir);
   Json summary = Json::object();
   summary["scene"] = "elastic_moduli";
   summary["scene_file"] = scene.path();
   Json& pj = summary["parameters"];
   pj = Json::object();
   for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
-  Json rows = Json::array();
-  H5Writer h5(opts.out_dir + "/results.h5");
-  std::map<std::string, std::vector<double>> table;
+  Outputs out;
+  Json configs = Json::array();
 
-  with_contact_model(contact, [&](const auto& model) {
+  with_contact_model(s.contact, [&](const auto& model) {
     using Model = std::decay_t<decltype(model)>;
-    DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, params);
-    std::vector<double> prep_phi, prep_p, prep_z;
-    auto sample = [&](const Measurements& m) {
-      prep_phi.push_back(m.phi), prep_p.push_back(m.pressure), prep_z.push_back(m.z_corrected);
-    };
-    Progress progress("preparation", 4 + static_cast<long>(targets.size()), opts.progress);
-    strain_to_phi(sys, phi0, -axis_rate, 500, sample);  // 2. compress to phi_0
-    progress.update(1);
-    relax(sys, relax_ratio, relax_max);  // 3. relax
-    progress.update(2);
-    strain_to_phi(sys, phi_max, -axis_rate, 500, sample);  // 4. compress to phi_max
-    progress.update(3);
-    std::vector<double> sorted = targets;
-    std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
-    long done = 3;
-    for (double t : sorted) {
-      strain_to_phi(sys, t, axis_rate, 500, sample);
-      const double ratio = relax(sys, relax_ratio, relax_max);
-      const Measurements m = sys.measure();
-      const std::string g = "/configurations/phi_" + std::to_string(t);
-      write_state(h5, g, sys.particles(), sys.box(), gas.density);
-      // Probe in place (history kept), with sliding off unless the scene keeps friction;
-      // the unloading continues afterwards with the preparation friction.
-      if (!keep_friction) sys.set_model(without_sliding(model));
-      double reversal = 0;
-      const Moduli mod = probe_moduli(sys, amplitude, strain_steps, probe_relax, &reversal);
-      sys.set_model(model);
-      TheoryInput ti;
-      ti.phi = m.phi, ti.z = m.z_corrected, ti.chi = m.chi, ti.kt_kn = kt_kn, ti.D = D;
-      const TheoryResult th = moduli_theory(ti);
-      ti.chi = -1;
-      const TheoryResult thc = moduli_theory(ti);
-      const double scale = kn_ref > 0 ? dbar / kn_ref : 1.0;
-      const std::map<std::string, double> row = {
-          {"phi", m.phi},
-          {"z_corrected", m.z_corrected},
-          {"chi", m.chi},
-          {"rattler_fraction", m.rattlers / host.size()},
-          {"pressure_star", m.pressure * scale},
-          {"ekin_over_epot", ratio},
-          {"K_star", mod.K * scale},
-          {"G_star", mod.G * scale},
-          {"M_star", mod.M * scale},
-          {"K_n_star", mod.K_n * scale},
-          {"K_t_star", mod.K_t * scale},
-          {"G_n_star", mod.G_n * scale},
-          {"G_t_star", mod.G_t * scale},
-          {"M_over_K_plus_4G_3", mod.M / (mod.K + 4 * mod.G / 3)},
-          {"isotropic_reversal_residual", reversal},
-          {"K_emt", th.K_emt},
-          {"G_emt", th.G_emt},
-          {"K_ft1", th.K_ft1},
-          {"G_ft1", th.G_ft1},
-          {"K_ft2", th.K_ft2},
-          {"G_ft2", th.G_ft2},
-          {"K_ft2_closure", thc.K_ft2},
-          {"G_ft2_closure", thc.G_ft2},
-          {"rho", th.rho},
-          {"zeta", th.zeta}};
-      Json r = Json::object();
-      for (const auto& [k, v] : row) r[k] = v, table[k].push_back(v);
-      rows.push(r);
-      std::cerr << "phi " << m.phi << ": Z " << m.z_corrected << "  K* " << mod.K * scale << "  G* "
-                << mod.G * scale << "  M/(K+4G/3) " << mod.M / (mod.K + 4 * mod.G / 3) << "\n";
-      progress.update(++done);
+    if (!s.start_from.empty()) {
+      const ConfigState c = read_config(s.start_from);
+      std::cerr << "probing the saved configuration " << s.start_from << " (phi " << c.phi << ")\n";
+      analyse(s, c, model,
+              {{"mu_preparation", kNaN},
+               {"seed", kNaN},
+               {"ekin_over_epot", kNaN},
+               {"inertial_number_preparation", kNaN},
+               {"phi_target", kNaN}},
+              "", out);
+      configs.push(Json(s.start_from));
+      return;
     }
-    h5.write("/preparation/phi", prep_phi);
-    h5.write("/preparation/pressure", prep_p);
-    h5.write("/preparation/z_corrected", prep_z);
+    Progress progress("preparation", static_cast<long>(s.variants.size() * (3 + s.targets.size())),
+                      opts.progress);
+    long done = 0;
+    for (const PrepVariant& v : s.variants) {
+      const Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
+      const double mu = std::isnan(v.mu)
+                            ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
+                            : v.mu;
+      const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
+      make_directories(dir);
+      std::vector<double> targets = s.targets;
+      prepare(s, v, prep, out, progress, done, [&](const ConfigState& c, double ratio, double I) {
+        // The target this configuration was saved at (the closest listed value).
+        double target = targets[0];
+        for (double t : targets)
+          if (std::fabs(t - c.phi) < std::fabs(target - c.phi)) target = t;
+        char name[64];
+        std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
+        write_config(dir + name, c);
+        configs.push(Json(dir + name));
+        analyse(s, c, prep,
+                {{"mu_preparation", mu},
+                 {"seed", static_cast<double>(v.seed)},
+                 {"ekin_over_epot", ratio},
+                 {"inertial_number_preparation", I},
+                 {"phi_target", target}},
+                v.tag, out);
+      });
+    }
   });
-  for (const auto& [k, v] : table) h5.write("/table/" + k, v);
-  h5.attribute("/", "D", D);
-  h5.attribute("/", "kt_kn", kt_kn);
+
+  H5Writer h5(opts.out_dir + "/results.h5");
+  for (const auto& [k, v] : out.table) h5.write("/table/" + k, v);
+  for (const auto& [k, v] : out.prep) h5.write("/preparation/" + k, v);
+  for (const auto& [k, v] : out.sweep_data) h5.write(k, v);
   h5.commit();
-  summary["size_moment_D"] = D;
-  summary["table"] = rows;
+  summary["configurations"] = configs;
+  summary["table"] = out.rows;
+  if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
+  if (s.halving) {
+    // Largest relative change of K, G, M over all configurations when the probing
+    // amplitude or rate is halved: the elastic-plateau criterion is < 1 %.
+    double worst_a = 0, worst_r = 0;
+    for (const char* m : {"K", "G", "M"}) {
+      for (double v : out.table.at(std::string("halving_amplitude_rel_change_") + m))
+        worst_a = std::max(worst_a, v);
+      for (double v : out.table.at(std::string("halving_rate_rel_change_") + m))
+        worst_r = std::max(worst_r, v);
+    }
+    Json& hc = summary["halving_check"];
+    hc = Json::object();
+    hc["max_rel_change_half_amplitude"] = worst_a;
+    hc["max_rel_change_half_rate"] = worst_r;
+    hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
+  }
+  // Scatter of the moduli over seeds at each size and target (system-size study).
+  if (out.table.count("phi_target") && s.variants.size() > 1) {
+    std::map<std::pair<double, double>, std::vector<std::pair<double, double>>> groups;
+    const auto& n = out.table.at("particles");
+    const auto& t = out.table.at("phi_target");
+    const auto& mu = out.table.at("mu_preparation");
+    for (size_t i = 0; i < n.size(); ++i)
+      if (mu[i] == mu[0] || std::isnan(mu[0]))
+        groups[{n[i], t[i]}].push_back({out.table.at("K_star")[i], out.table.at("G_star")[i]});
+    Json sc = Json::array();
+    for (const auto& [key, vals] : groups) {
+      double mk = 0, mg = 0, vk = 0, vg = 0;
+      for (const auto& [k, g] : vals) mk += k, mg += g;
+      mk /= vals.size(), mg /= vals.size();
+      for (const auto& [k, g] : vals) vk += (k - mk) * (k - mk), vg += (g - mg) * (g - mg);
+      const double dof = vals.size() > 1 ? vals.size() - 1.0 : 1.0;
+      Json e = Json::object();
+      e["particles"] = key.first, e["phi_target"] = key.second;
+      e["samples"] = static_cast<double>(vals.size());
+      e["K_star_mean"] = mk, e["K_star_std"] = std::sqrt(vk / dof);
+      e["G_star_mean"] = mg, e["G_star_std"] = std::sqrt(vg / dof);
+      sc.push(e);
+    }
+    summary["size_scatter"] = sc;
+  }
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
   if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -41,4 +41,8 @@ TYPED_TEST(ProbingTest, SimpleCubicLatticeModuliMatchTheExactSpringNetwork) {
   EXPECT_NEAR(mod.M / (mod.K + 4.0 / 3.0 * mod.G), 1.0, 1e-5);
   EXPECT_NEAR(mod.K_n, mod.K, 1e-9 * mod.K);  // frictionless: all normal
   EXPECT_EQ(mod.K_t, 0.0);
+  // The lattice deforms affinely by symmetry: no non-affine fluctuation in any mode.
+  EXPECT_LT(mod.eta_K, 1e-6);
+  EXPECT_LT(mod.eta_G, 1e-6);
+  EXPECT_LT(mod.eta_M, 1e-6);
 }

@@ -1,4 +1,6 @@
-"""Charts of the elastic_moduli scene: K*, G* against phi Z with EMT and FT predictions."""
+"""Charts of the elastic_moduli scene: K*, G* against phi Z with EMT and FT predictions
+(one panel row per preparation friction / probing stiffness ratio), Z and chi against phi,
+moduli against probe amplitude (amplitude sweeps), and the moduli scatter against N."""
 import sys
 
 import h5py
@@ -9,25 +11,91 @@ from chartkit import plt, save
 h5, outdir = sys.argv[1], sys.argv[2]
 with h5py.File(h5, "r") as f:
     t = {k: f["table"][k][:] for k in f["table"]}
-x = t["phi"] * t["z_corrected"]
-order = np.argsort(x)
+    sweeps = {}
+    if "sweep" in f:
+        for name in f["sweep"]:
+            sweeps[name] = {k: f["sweep"][name][k][:] for k in f["sweep"][name]}
+
+
+def groups(t):
+    """Rows with the same preparation friction, stiffness ratio and size form one series."""
+    keys = np.stack([np.nan_to_num(t["mu_preparation"], nan=-1), t["kt_kn"], t["particles"]], 1)
+    out = {}
+    for i, k in enumerate(map(tuple, keys)):
+        out.setdefault(k, []).append(i)
+    return out
+
+
+series = groups(t)
 fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for ax, m in zip(axes, ("K", "G")):
-    ax.plot(x[order], t[m + "_star"][order], "ko", label="simulation")
-    ax.plot(x[order], t[m + "_emt"][order], "-", label="EMT")
-    ax.plot(x[order], t[m + "_ft1"][order], "--", label="FT, first ring")
-    ax.plot(x[order], t[m + "_ft2"][order], "-.", label="FT, second ring")
-    ax.plot(x[order], t[m + "_ft2_closure"][order], ":", label="FT, chi = 1/(phi Z)")
+    for n, (key, idx) in enumerate(sorted(series.items())):
+        idx = np.array(idx)
+        x = t["phi"][idx] * t["z_corrected"][idx]
+        o = np.argsort(x)
+        label = []
+        if key[0] >= 0:
+            label.append("mu %g" % key[0])
+        if len({k[1] for k in series}) > 1:
+            label.append("kt/kn %g" % key[1])
+        if len({k[2] for k in series}) > 1:
+            label.append("N %d" % key[2])
+        label = ", ".join(label) or "simulation"
+        c = "C%d" % n
+        ax.plot(x[o], t[m + "_star"][idx][o], "o", color=c, label=label)
+        ax.plot(x[o], t[m + "_emt"][idx][o], "-", color=c, lw=0.8,
+                label="EMT" if n == 0 else None)
+        ax.plot(x[o], t[m + "_ft2"][idx][o], "-.", color=c, lw=0.8,
+                label="FT, second ring" if n == 0 else None)
+        ax.plot(x[o], t[m + "_ft2_closure"][idx][o], ":", color=c, lw=0.8,
+                label="FT, chi = 1/(phi Z)" if n == 0 else None)
     ax.set_xlabel("phi Z")
     ax.set_ylabel(m + "* = " + m + " dbar / k_n")
     ax.legend(fontsize=7)
 save(fig, outdir, "moduli_vs_phiZ.png")
 
 fig, ax = plt.subplots(figsize=(5, 4))
-ax.plot(t["phi"], t["z_corrected"], "o-", label="Z (non-rattlers)")
+o = np.argsort(t["phi"])
+ax.plot(t["phi"][o], t["z_corrected"][o], "o", label="Z (non-rattlers)")
 ax2 = ax.twinx()
-ax2.plot(t["phi"], t["chi"], "s--", color="C1", label="chi")
+ax2.plot(t["phi"][o], t["chi"][o], "s", color="C1", label="chi")
 ax.set_xlabel("phi")
 ax.set_ylabel("Z")
 ax2.set_ylabel("chi")
 save(fig, outdir, "coordination_vs_phi.png")
+
+if sweeps:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for n, (name, s) in enumerate(sorted(sweeps.items())):
+        c = "C%d" % n
+        for m, mk in (("K", "o-"), ("G", "s--"), ("M", "^:")):
+            axes[0].loglog(s["amplitude"], np.abs(s[m + "_star"]), mk, color=c, ms=4,
+                           label="%s* %s" % (m, name))
+        axes[1].loglog(s["amplitude"], s["eta_K"], "o-", color=c, ms=4, label="eta, " + name)
+        if "reversal_residual" in s:
+            axes[1].loglog(s["amplitude"], np.abs(s["reversal_residual"]), "x--", color=c,
+                           ms=5, label="|reversal residual|, " + name)
+    axes[0].set_xlabel("probe strain amplitude")
+    axes[0].set_ylabel("secant modulus (dimensionless)")
+    axes[0].legend(fontsize=6)
+    axes[1].set_xlabel("probe strain amplitude")
+    axes[1].set_ylabel("isotropic probe: eta, |reversal residual|")
+    axes[1].legend(fontsize=6)
+    save(fig, outdir, "moduli_vs_amplitude.png")
+
+sizes = np.unique(t["particles"])
+if len(sizes) > 1 and "phi_target" in t:
+    fig, ax = plt.subplots(figsize=(5, 4))
+    for n, target in enumerate(np.unique(t["phi_target"])):
+        sel = t["phi_target"] == target
+        for m, mk in (("K", "o-"), ("G", "s--")):
+            rel = []
+            for N in sizes:
+                v = t[m + "_star"][sel & (t["particles"] == N)]
+                rel.append(np.std(v, ddof=1) / np.mean(v) if len(v) > 1 else np.nan)
+            ax.loglog(sizes, rel, mk, color="C%d" % n, label="%s*, phi %.3f" % (m, target))
+    ax.loglog(sizes, 0.1 * (sizes / sizes[0]) ** -0.5, "k:", lw=0.8, label="N^-1/2")
+    ax.set_xlabel("N")
+    ax.set_ylabel("relative scatter over seeds (std / mean)")
+    ax.legend(fontsize=7)
+    save(fig, outdir, "scatter_vs_size.png")

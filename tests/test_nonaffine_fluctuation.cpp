@@ -1,0 +1,58 @@
+// Non-affine displacement fluctuation (dem.md section 7): for each contact, the relative
+// displacement minus its affine part eps l, normalised by |eps l|. Checked on a chain of
+// contacts with a hand-made displacement field, and zero for an affine deformation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "exec_spaces.hpp"
+#include "kernels/measure.hpp"
+
+using namespace granular;
+
+template <class T>
+class NonAffineTest : public ::testing::Test {};
+TYPED_TEST_SUITE(NonAffineTest, granular::testing::ExecSpaces);
+
+// Three spheres in a row along x, touching 0-1 through the periodic face and 1-2 inside.
+TYPED_TEST(NonAffineTest, FluctuationOfAHandMadeDisplacementFieldMatchesItsDefinition) {
+  using Exec = TypeParam;
+  const double gap = 0.99;  // centre distance, radius 0.5: overlapping
+  HostParticles h;
+  h.resize(3);
+  const double x[3] = {9.7, 9.7 + gap - 10.0, 9.7 + 2 * gap - 10.0};
+  for (int i = 0; i < 3; ++i) h.x[i] = x[i], h.y[i] = 2.0, h.z[i] = 2.0;
+  for (int i = 0; i < 3; ++i) h.radius[i] = 0.5, h.density[i] = 1.0;
+  PeriodicBox box0;
+  box0.len[0] = 10.0, box0.len[1] = 4.0, box0.len[2] = 4.0;
+  auto p = Particles<Exec>::from_host(h);
+  const auto x0 = positions_by_id(p);
+
+  // Deform the box by eps = (e, 0, 0) about its lower corner, move everyone affinely, and
+  // add a non-affine displacement u to particle 1 only.
+  const double e = -1e-3, u[3] = {2e-4, 1e-4, 0.0};
+  PeriodicBox box = box0;
+  box.len[0] *= 1 + e;
+  auto hx = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
+  for (int i = 0; i < 3; ++i) hx(i, 0) = box.lo[0] + (hx(i, 0) - box.lo[0]) * (1 + e);
+  for (int d = 0; d < 3; ++d) hx(1, d) += u[d];
+  Kokkos::deep_copy(p.x, hx);
+  NeighborList<Exec> nl(0.1);
+  nl.build(p, box);
+  const NonAffine na = nonaffine_fluctuation(p, nl, box, box0, x0);
+  ASSERT_EQ(na.contacts, 2.0);  // 0-1 through the face and 1-2
+  // Both contacts: |Delta| = |u|, |eps l| = |e| |l_x| with the current separations
+  // l_x = gap (1 + e) + u_x (pair 0-1) and gap (1 + e) - u_x (pair 1-2).
+  const double un = std::sqrt(u[0] * u[0] + u[1] * u[1]);
+  const double l01 = gap * (1 + e) + u[0], l12 = gap * (1 + e) - u[0];
+  const double expect = 0.5 * (un / (std::fabs(e) * l01) + un / (std::fabs(e) * l12));
+  EXPECT_NEAR(na.eta, expect, 1e-9 * expect);
+  EXPECT_NEAR(na.eta_ratio, 2 * un / (std::fabs(e) * (l01 + l12)), 1e-9 * expect);
+
+  // Without the extra displacement the deformation is affine: no fluctuation at all.
+  for (int d = 0; d < 3; ++d) hx(1, d) -= u[d];
+  Kokkos::deep_copy(p.x, hx);
+  const NonAffine affine = nonaffine_fluctuation(p, nl, box, box0, x0);
+  EXPECT_LT(affine.eta, 1e-9);
+  EXPECT_EQ(affine.contacts, 2.0);
+}
