@@ -186,14 +186,20 @@ TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
   auto make = [&] { return restart_system<DemSystem<Exec, Frictional>>(c, model, sys.params()); };
   const Moduli a = probe_moduli_restarting(make, 2e-6, 200, 200);
   const Moduli b = probe_moduli_restarting(make, 1e-6, 100, 200);  // half amplitude, same rate
-  EXPECT_NEAR(b.K / a.K, 1.0, 0.01);
-  EXPECT_NEAR(b.G / a.G, 1.0, 0.01);
-  EXPECT_NEAR(b.M / a.M, 1.0, 0.01);
+  // 100 particles just compressed still gain and lose contacts during a probe, so the
+  // moduli keep a few per cent of amplitude dependence (the relaxed packings of the scenes
+  // stay below 1 %); what the reference run removes is the drift, which is hundreds of per
+  // cent of the volumetric moduli here.
+  EXPECT_NEAR(b.K / a.K, 1.0, 0.05);
+  EXPECT_NEAR(b.G / a.G, 1.0, 0.05);
+  EXPECT_NEAR(b.M / a.M, 1.0, 0.05);
   // Without the reference run (in place, increments against the initial state) the drift
   // dominates: halving the amplitude changes the moduli by far more.
   auto s1 = make();
   auto s2 = make();
   const Moduli p = probe_moduli(s1, 2e-6, 200, 200);
   const Moduli q = probe_moduli(s2, 1e-6, 100, 200);
-  EXPECT_GT(std::fabs(q.K / p.K - 1.0), 0.05);
+  EXPECT_GT(std::fabs(q.K / p.K - 1.0), 1.0);
+  EXPECT_GT(std::fabs(q.M / p.M - 1.0), 1.0);
+  EXPECT_LT(std::fabs(b.K / a.K - 1.0), 0.02 * std::fabs(q.K / p.K - 1.0));
 }
