@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <limits>
@@ -22,6 +23,7 @@
 #include "scenarios/config_state.hpp"
 #include "scenarios/contact_config.hpp"
 #include "scenarios/element_test.hpp"
+#include "scenarios/moduli_outputs.hpp"
 #include "scenarios/moduli_theory.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -74,6 +76,7 @@ struct Setup {
   double amplitude = 3e-6, probe_inertial = 0;
   long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
   bool keep_friction = false, halving = false;
+  long stop_after_variants = 0;    // prepare at most this many variants, then stop (0: all)
   std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
   std::vector<double> amplitudes;  // amplitude sweep (empty: none)
 };
@@ -88,6 +91,8 @@ Setup read_setup(const SceneFile& scene) {
   s.params.damping.rotational = scene.real("damping.rotational", 0.0);
   s.params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
   s.params.max_overlap = scene.real("run.max_overlap", 0.5);
+  s.stop_after_variants = scene.integer("run.stop_after_variants", 0);
+  scene.require(s.stop_after_variants >= 0, "run.stop_after_variants", "must not be negative");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
   s.amplitude = scene.real("probe.amplitude", 3e-6);
@@ -234,13 +239,7 @@ Moduli probe_config(const ConfigState& c, const Model& model, const DemParams& p
 
 double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }
 
-struct Outputs {
-  Json rows = Json::array();
-  Json sweeps = Json::array();
-  std::map<std::string, std::vector<double>> table;
-  std::map<std::string, std::vector<double>> prep;  // preparation series
-  std::vector<std::pair<std::string, std::vector<double>>> sweep_data;
-};
+using Outputs = ModuliOutputs;
 
 // Everything measured on one configuration; rows appended to `out`.
 template <class Model>
@@ -328,10 +327,7 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
         {"rho", th.rho},
         {"zeta", th.zeta}};
     row.insert(values.begin(), values.end());
-    Json r = Json::object();
-    r["tag"] = tag;
-    for (const auto& [k, v] : row) r[k] = v, out.table[k].push_back(v);
-    out.rows.push(r);
+    out.add_row(tag, row);
     std::cerr << "phi " << m.phi << (ratio >= 0 ? "  kt/kn " + std::to_string(ratio) : "") << ": Z "
               << m.z_corrected << "  K* " << mod.K * scale << "  G* " << mod.G * scale
               << "  M/(K+4G/3) " << mod.M / (mod.K + 4 * mod.G / 3) << "  eta_K " << mod.eta_K
@@ -364,13 +360,7 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   char name[64];
   std::snprintf(name, sizeof name, "phi_%.4f", c.phi);
   const std::string group = "/sweep/" + (tag.empty() ? "" : tag + "_") + name;
-  Json j = Json::object();
-  j["tag"] = tag, j["phi"] = m.phi, j["z_corrected"] = m.z_corrected;
-  for (const auto& [k, v] : sw) {
-    j[k] = Json(v);
-    out.sweep_data.push_back({group + "/" + k, v});
-  }
-  out.sweeps.push(j);
+  out.add_sweep({group, tag, m.phi, m.z_corrected}, sw);
 }
 
 // Runs the protocol for one variant, calling `on_config` with each relaxed configuration.
@@ -448,8 +438,16 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   pj = Json::object();
   for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
   Outputs out;
-  Json configs = Json::array();
+  // Finished preparation variants are checkpointed here; a fresh run starts without them.
+  const std::string parts = opts.out_dir + "/variants";
+  // How far a run goes is not a parameter of its results: resuming may change it.
+  std::string fingerprint_text;
+  for (const auto& [k, v] : scene.used())
+    if (k != "run.stop_after_variants") fingerprint_text += k + "=" + v + "\n";
+  const std::string fingerprint = parameter_fingerprint(fingerprint_text);
+  if (!opts.resume) std::filesystem::remove_all(parts);
 
+  bool stopped = false;
   with_contact_model(s.contact, [&](const auto& model) {
     using Model = std::decay_t<decltype(model)>;
     if (!s.start_from.empty()) {
@@ -462,13 +460,30 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                {"inertial_number_preparation", kNaN},
                {"phi_target", kNaN}},
               "", out);
-      configs.push(Json(s.start_from));
+      out.add_config(s.start_from);
       return;
     }
     Progress progress("preparation", static_cast<long>(s.variants.size() * (3 + s.targets.size())),
                       opts.progress);
-    long done = 0;
+    long done = 0, prepared = 0;
     for (const PrepVariant& v : s.variants) {
+      const std::string part_name =
+          "variant_" + std::to_string(&v - s.variants.data()) + (v.tag.empty() ? "" : "_" + v.tag);
+      Outputs part;
+      if (opts.resume && load_moduli_part(parts, part_name, fingerprint, part)) {
+        std::cerr << "variant " << (v.tag.empty() ? part_name : v.tag)
+                  << ": taken from the checkpoint in " << parts << "\n";
+        out.append(part);
+        progress.update(done += static_cast<long>(3 + s.targets.size()));
+        continue;
+      }
+      if (s.stop_after_variants > 0 && prepared == s.stop_after_variants) {
+        std::cerr << "stopped after " << prepared
+                  << " variants (run.stop_after_variants); continue with --resume\n";
+        stopped = true;
+        return;
+      }
+      ++prepared;
       const Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
       const double mu = std::isnan(v.mu)
                             ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
@@ -476,7 +491,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
       make_directories(dir);
       std::vector<double> targets = s.targets;
-      prepare(s, v, prep, out, progress, done, [&](const ConfigState& c, double ratio, double I) {
+      prepare(s, v, prep, part, progress, done, [&](const ConfigState& c, double ratio, double I) {
         // The target this configuration was saved at (the closest listed value).
         double target = targets[0];
         for (double t : targets)
@@ -484,24 +499,27 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         char name[64];
         std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
         write_config(dir + name, c);
-        configs.push(Json(dir + name));
+        part.add_config(dir + name);
         analyse(s, c, prep,
                 {{"mu_preparation", mu},
                  {"seed", static_cast<double>(v.seed)},
                  {"ekin_over_epot", ratio},
                  {"inertial_number_preparation", I},
                  {"phi_target", target}},
-                v.tag, out);
+                v.tag, part);
       });
+      save_moduli_part(parts, part_name, fingerprint, part);
+      out.append(part);
     }
   });
 
+  if (stopped) return;  // the checkpoints in variants/ are the output so far
   H5Writer h5(opts.out_dir + "/results.h5");
   for (const auto& [k, v] : out.table) h5.write("/table/" + k, v);
   for (const auto& [k, v] : out.prep) h5.write("/preparation/" + k, v);
   for (const auto& [k, v] : out.sweep_data) h5.write(k, v);
   h5.commit();
-  summary["configurations"] = configs;
+  summary["configurations"] = out.configs;
   summary["table"] = out.rows;
   if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
   if (s.halving) {
@@ -546,6 +564,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     summary["size_scatter"] = sc;
   }
   write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

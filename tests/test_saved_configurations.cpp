@@ -203,3 +203,41 @@ TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
   EXPECT_GT(std::fabs(q.M / p.M - 1.0), 1.0);
   EXPECT_LT(std::fabs(b.K / a.K - 1.0), 0.02 * std::fabs(q.K / p.K - 1.0));
 }
+
+TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterruptedStudyBitwise) {
+  const auto root = std::filesystem::temp_directory_path() / "granular_variant_resume_test";
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  // Two preparation variants (friction 0 and 0.5), each with an amplitude sweep.
+  std::string common = kCommon;
+  const std::string relax = "relax_steps = 200\n";
+  common.replace(common.find(relax), relax.size(), relax + "amplitudes = [1.0e-6, 1.0e-5]\n");
+  const std::string text = std::string(kPrepare) + "mu = [0.0, 0.5]\n" + common;
+
+  opts.out_dir = (root / "straight").string();
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  opts.out_dir = (root / "interrupted").string();
+  run_elastic_moduli(scene(text + "stop_after_variants = 1\n", "study.toml"), opts);
+  EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "results.h5"));
+  EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "summary.json"));
+  ASSERT_TRUE(std::filesystem::exists(root / "interrupted" / "variants"));
+  // A checkpoint is only taken up by the scene that wrote it.
+  opts.resume = true;
+  std::string other = text;
+  other.replace(other.find("seed = 3"), 8, "seed = 4");
+  EXPECT_THROW(run_elastic_moduli(scene(other, "study.toml"), opts), InputError);
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "variants"));  // superseded
+
+  const H5Reader a((root / "straight" / "results.h5").string());
+  const H5Reader b((root / "interrupted" / "results.h5").string());
+  for (const char* name : {"/table/K_star", "/table/G_star", "/table/mu_preparation",
+                           "/table/eta_G", "/preparation/phi", "/preparation/variant",
+                           "/sweep/mu0.5_phi_0.6800/M_star", "/sweep/mu0_phi_0.6800/G_star"}) {
+    ASSERT_TRUE(a.has(name)) << name;
+    EXPECT_EQ(a.reals(name), b.reals(name)) << name;
+  }
+  EXPECT_EQ(a.reals("/table/mu_preparation"), (std::vector<double>{0.0, 0.5}));
+  std::filesystem::remove_all(root);
+}

@@ -1,0 +1,133 @@
+#include "scenarios/moduli_outputs.hpp"
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace granular {
+
+void ModuliOutputs::add_row(const std::string& tag, const std::map<std::string, double>& row) {
+  Json r = Json::object();
+  r["tag"] = tag;
+  for (const auto& [k, v] : row) r[k] = v, table[k].push_back(v);
+  rows.push(r);
+  table_tags.push_back(tag);
+}
+
+void ModuliOutputs::add_sweep(const SweepMeta& meta,
+                              const std::map<std::string, std::vector<double>>& columns) {
+  Json j = Json::object();
+  j["tag"] = meta.tag, j["phi"] = meta.phi, j["z_corrected"] = meta.z_corrected;
+  for (const auto& [k, v] : columns) {
+    j[k] = Json(v);
+    sweep_data.push_back({meta.group + "/" + k, v});
+  }
+  sweeps.push(j);
+  sweep_meta.push_back(meta);
+}
+
+void ModuliOutputs::add_config(const std::string& path) {
+  configs.push(Json(path));
+  config_paths.push_back(path);
+}
+
+void ModuliOutputs::append(const ModuliOutputs& part) {
+  // Rows and sweeps are rebuilt through add_* so the summary and the datasets stay in step.
+  const size_t n = part.table_tags.size();
+  for (size_t i = 0; i < n; ++i) {
+    std::map<std::string, double> row;
+    for (const auto& [k, v] : part.table) row[k] = v.at(i);
+    add_row(part.table_tags[i], row);
+  }
+  for (const auto& [k, v] : part.prep) prep[k].insert(prep[k].end(), v.begin(), v.end());
+  for (const SweepMeta& m : part.sweep_meta) add_sweep(m, part.sweep_columns(m.group));
+  for (const std::string& p : part.config_paths) add_config(p);
+}
+
+std::map<std::string, std::vector<double>> ModuliOutputs::sweep_columns(
+    const std::string& group) const {
+  std::map<std::string, std::vector<double>> cols;
+  const std::string prefix = group + "/";
+  for (const auto& [name, v] : sweep_data)
+    if (name.compare(0, prefix.size(), prefix) == 0) cols[name.substr(prefix.size())] = v;
+  return cols;
+}
+
+std::string parameter_fingerprint(const std::string& text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// Index lines: "fingerprint F", then "<kind> <name>" with kind table/prep/sweep/config/tag;
+// sweep lines carry "<group> <tag> <phi> <z> <column>..." (names never hold spaces).
+void save_moduli_part(const std::string& dir, const std::string& name,
+                      const std::string& fingerprint, const ModuliOutputs& part) {
+  make_directories(dir);
+  H5Writer h5(dir + "/" + name + ".h5");
+  std::ostringstream index;
+  index.precision(17);
+  index << "fingerprint " << fingerprint << "\n";
+  for (const auto& [k, v] : part.table) h5.write("/table/" + k, v), index << "table " << k << "\n";
+  for (const auto& [k, v] : part.prep)
+    h5.write("/preparation/" + k, v), index << "prep " << k << "\n";
+  for (const auto& [k, v] : part.sweep_data) h5.write(k, v);
+  for (const auto& m : part.sweep_meta) {
+    index << "sweep " << m.group << " " << (m.tag.empty() ? "-" : m.tag) << " " << m.phi << " "
+          << m.z_corrected;
+    for (const auto& [col, v] : part.sweep_columns(m.group)) index << " " << col;
+    index << "\n";
+  }
+  for (const auto& t : part.table_tags) index << "tag " << (t.empty() ? "-" : t) << "\n";
+  for (const auto& p : part.config_paths) index << "config " << p << "\n";
+  h5.commit();
+  write_text_file(dir + "/" + name + ".index", index.str());
+}
+
+bool load_moduli_part(const std::string& dir, const std::string& name,
+                      const std::string& fingerprint, ModuliOutputs& part) {
+  const std::string index_path = dir + "/" + name + ".index";
+  std::ifstream in(index_path);
+  if (!in) return false;
+  std::string kind, value, line;
+  in >> kind >> value;
+  if (kind != "fingerprint" || value != fingerprint)
+    throw InputError(index_path +
+                     ": this checkpoint was written by a run with other scene parameters; "
+                     "continue with the scene file it was made with, or run without --resume "
+                     "into an empty output directory");
+  H5Reader h5(dir + "/" + name + ".h5");
+  auto untag = [](const std::string& t) { return t == "-" ? std::string() : t; };
+  while (in >> kind) {
+    std::getline(in, line);
+    std::istringstream rest(line);
+    if (kind == "table") {
+      rest >> value, part.table[value] = h5.reals("/table/" + value);
+    } else if (kind == "prep") {
+      rest >> value, part.prep[value] = h5.reals("/preparation/" + value);
+    } else if (kind == "tag") {
+      rest >> value, part.table_tags.push_back(untag(value));
+    } else if (kind == "config") {
+      rest >> value, part.add_config(value);
+    } else if (kind == "sweep") {
+      ModuliOutputs::SweepMeta m;
+      std::string tag;
+      rest >> m.group >> tag >> m.phi >> m.z_corrected;
+      m.tag = untag(tag);
+      std::map<std::string, std::vector<double>> cols;
+      while (rest >> value) cols[value] = h5.reals(m.group + "/" + value);
+      part.add_sweep(m, cols);
+    } else {
+      throw InputError(index_path + ": unreadable checkpoint index line '" + kind + line + "'");
+    }
+  }
+  return true;
+}
+
+}  // namespace granular

@@ -1,0 +1,56 @@
+// What an elastic-moduli study accumulates (table rows, preparation series, amplitude
+// sweeps, saved configurations), and its per-variant checkpoints: a full study prepares
+// several packings for hours, so each finished preparation variant is written to
+// <out>/variants/ and a run continued with --resume takes it from there instead of
+// preparing it again.
+#pragma once
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/output.hpp"
+
+namespace granular {
+
+struct ModuliOutputs {
+  Json rows = Json::array();
+  Json sweeps = Json::array();
+  Json configs = Json::array();
+  std::map<std::string, std::vector<double>> table;
+  std::map<std::string, std::vector<double>> prep;  // preparation series
+  std::vector<std::pair<std::string, std::vector<double>>> sweep_data;
+  // Per sweep group (e.g. "/sweep/mu0.5_phi_0.6800"): tag, phi and Z of the configuration.
+  struct SweepMeta {
+    std::string group, tag;
+    double phi = 0, z_corrected = 0;
+  };
+  std::vector<SweepMeta> sweep_meta;
+  std::vector<std::string> table_tags;  // tag of each table row
+  std::vector<std::string> config_paths;
+
+  // Appends one table row (the row also goes to summary.json, labelled with its tag).
+  void add_row(const std::string& tag, const std::map<std::string, double>& row);
+  // Appends one amplitude sweep of a configuration (columns by name) under `group`.
+  void add_sweep(const SweepMeta& meta, const std::map<std::string, std::vector<double>>& columns);
+  void add_config(const std::string& path);
+  // Everything of `part` appended after what is already here.
+  void append(const ModuliOutputs& part);
+  // The sweep columns stored under `group`, by name.
+  std::map<std::string, std::vector<double>> sweep_columns(const std::string& group) const;
+};
+
+// Fingerprint of a scene's parameters (FNV-1a of their text), so a checkpoint is only
+// taken up by a run of the same scene.
+std::string parameter_fingerprint(const std::string& text);
+
+// <dir>/<name>.h5 holds the datasets, <dir>/<name>.index (written last) lists them with the
+// fingerprint: a variant counts as finished only when its index exists.
+void save_moduli_part(const std::string& dir, const std::string& name,
+                      const std::string& fingerprint, const ModuliOutputs& part);
+// True and `part` filled when a finished part with the same fingerprint exists; throws
+// InputError naming the file when it belongs to other parameters.
+bool load_moduli_part(const std::string& dir, const std::string& name,
+                      const std::string& fingerprint, ModuliOutputs& part);
+
+}  // namespace granular
