@@ -9,14 +9,17 @@
 // amplitude halving check, and probing saved configurations ([start] from).
 #include <Kokkos_Core.hpp>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "core/output.hpp"
 #include "core/progress.hpp"
@@ -76,7 +79,10 @@ struct Setup {
   double amplitude = 3e-6, probe_inertial = 0;
   long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
   bool keep_friction = false, halving = false;
-  long stop_after_variants = 0;    // prepare at most this many variants, then stop (0: all)
+  // How much of the preparation this run does before it stops at a checkpoint (0: all):
+  // variants, stages (a 0.02 step in phi, a relaxation or a saved configuration), minutes.
+  long stop_after_variants = 0, stop_after_stages = 0;
+  double stop_after_minutes = 0;
   std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
   std::vector<double> amplitudes;  // amplitude sweep (empty: none)
 };
@@ -92,7 +98,11 @@ Setup read_setup(const SceneFile& scene) {
   s.params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
   s.params.max_overlap = scene.real("run.max_overlap", 0.5);
   s.stop_after_variants = scene.integer("run.stop_after_variants", 0);
+  s.stop_after_stages = scene.integer("run.stop_after_stages", 0);
+  s.stop_after_minutes = scene.real("run.stop_after_minutes", 0.0);
   scene.require(s.stop_after_variants >= 0, "run.stop_after_variants", "must not be negative");
+  scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
+  scene.require(s.stop_after_minutes >= 0, "run.stop_after_minutes", "must not be negative");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
   s.amplitude = scene.real("probe.amplitude", 3e-6);
@@ -363,10 +373,36 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   out.add_sweep({group, tag, m.phi, m.z_corrected}, sw);
 }
 
+// Where a variant's preparation checkpoints its stages: "<dir>/<name>_stage" holds the
+// number of the last finished stage k, "<name>_stage<k>_state.h5" the state after it and the
+// part "<name>_stage<k>" the outputs so far (written before the number, so the number
+// never points at an incomplete checkpoint).
+struct StageCheckpoints {
+  std::string dir, name, fingerprint;
+  bool resume = false;
+  std::string state(long k) const {
+    return dir + "/" + name + "_stage" + std::to_string(k) + "_state.h5";
+  }
+  std::string part(long k) const { return name + "_stage" + std::to_string(k); }
+  std::string pointer() const { return dir + "/" + name + "_stage"; }
+  void remove(long k) const {
+    if (k < 0) return;
+    for (const std::string& f :
+         {state(k), dir + "/" + part(k) + ".h5", dir + "/" + part(k) + ".index"})
+      std::filesystem::remove(f);
+  }
+};
+
 // Runs the protocol for one variant, calling `on_config` with each relaxed configuration.
+// The protocol is a list of stages (strains cut at every 0.02 in phi, relaxations, saved
+// configurations); after each one the state and the outputs so far are checkpointed and
+// the run continues from the checkpointed state itself, so a run resumed from any stage
+// repeats the uninterrupted one bit for bit.
+// Returns false when `stop` asked to end the run at a checkpoint.
 template <class Model>
-void prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& out,
-             Progress& progress, long& done,
+bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& out,
+             Progress& progress, long& done, const StageCheckpoints& ck,
+             const std::function<bool()>& stop,
              const std::function<void(const ConfigState&, double, double)>& on_config) {
   GasSpec gas = s.gas;
   gas.count = v.count, gas.seed = v.seed;
@@ -375,7 +411,9 @@ void prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
   double dsum = 0;
   for (double a : host.radius) dsum += 2 * a;
   const double dbar = dsum / host.size();
-  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, s.params);
+  using System = DemSystem<Exec, Model>;
+  std::optional<System> sys;
+  sys.emplace(Particles<Exec>::from_host(host), box, model, s.params);
   double rate_now = s.rate;
   // Volumetric rate for the target inertial number, within [min_rate, rate].
   auto rate_of = [&](const Measurements& m) {
@@ -396,32 +434,71 @@ void prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
   auto strain = [&](double target, double sign) {
     std::function<double(const Measurements&)> f = nullptr;
     if (s.prep_inertial > 0) f = [&, sign](const Measurements& m) { return sign * rate_of(m) / 3; };
-    strain_to_phi(sys, target, sign * s.rate / 3, 500, sample, f);
+    strain_to_phi(*sys, target, sign * s.rate / 3, 500, sample, f);
   };
-  auto save = [&](double target, double sign) {
-    strain(target, sign);
-    const double ratio = relax(sys, s.relax_ratio, s.relax_max);
-    const Measurements m = sys.measure();
+  auto save = [&] {
+    const double ratio = relax(*sys, s.relax_ratio, s.relax_max);
+    const Measurements m = sys->measure();
     const double I = m.pressure > 0 ? rate_now * dbar * std::sqrt(gas.density / m.pressure) : kNaN;
-    on_config(snapshot(sys, host.density, m.pressure), ratio, I);
-    progress.update(++done);
+    on_config(snapshot(*sys, host.density, m.pressure), ratio, I);
   };
-  strain(s.phi0, -1);  // 2. compress to phi_0
-  progress.update(++done);
-  relax(sys, s.relax_ratio, s.relax_max);  // 3. relax
-  progress.update(++done);
+  // The stages: work, and whether it ends a step of the protocol (for the progress line).
+  std::vector<std::pair<std::function<void()>, bool>> stages;
+  auto add_strain = [&](double from, double to, double sign, bool ends_step) {
+    const double chunk = 0.02;
+    const double up = -sign;  // compression (negative strain) raises phi
+    for (double t = from + up * chunk; up * (to - t) > 1e-12; t += up * chunk)
+      stages.push_back({[&strain, t, sign] { strain(t, sign); }, false});
+    stages.push_back({[&strain, to, sign] { strain(to, sign); }, ends_step});
+  };
+  add_strain(s.gas.phi, s.phi0, -1, true);  // 2. compress to phi_0
+  stages.push_back({[&] { relax(*sys, s.relax_ratio, s.relax_max); }, true});  // 3. relax
   std::vector<double> sorted = s.targets;
+  double from = s.phi0;
   if (s.loading_branch) {  // configurations on the way up (strongly cohesive samples)
     std::sort(sorted.begin(), sorted.end());
-    for (double t : sorted) save(t, -1);
-    strain(s.phi_max, -1);
-    progress.update(++done);
-    return;
+    for (double t : sorted)
+      add_strain(from, t, -1, false), stages.push_back({save, true}), from = t;
+    add_strain(from, s.phi_max, -1, true);
+  } else {
+    add_strain(from, s.phi_max, -1, true);      // 4. compress to phi_max
+    std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
+    from = s.phi_max;
+    for (double t : sorted)
+      add_strain(from, t, +1, false), stages.push_back({save, true}), from = t;
   }
-  strain(s.phi_max, -1);  // 4. compress to phi_max
-  progress.update(++done);
-  std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
-  for (double t : sorted) save(t, +1);
+
+  long first = 0;
+  if (ck.resume) {
+    std::ifstream in(ck.pointer());
+    long k = -1;
+    if (in >> k && k >= 0 && k < static_cast<long>(stages.size())) {
+      if (!load_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out))
+        throw InputError(ck.pointer() +
+                         ": the checkpoint it names is missing; run without --resume");
+      sys.emplace(restart_system<System>(read_config(ck.state(k)), model, s.params));
+      for (long q = 0; q <= k; ++q) done += stages[q].second ? 1 : 0;
+      progress.update(done);
+      first = k + 1;
+      std::cerr << "variant " << (v.tag.empty() ? ck.name : v.tag) << ": continuing after stage "
+                << k + 1 << " of " << stages.size() << "\n";
+    }
+  }
+  for (long k = first; k < static_cast<long>(stages.size()); ++k) {
+    stages[k].first();
+    if (stages[k].second) progress.update(++done);
+    if (k + 1 == static_cast<long>(stages.size())) break;  // the variant's part follows
+    const ConfigState c = snapshot(*sys, host.density, sys->measure().pressure);
+    write_config(ck.state(k), c);
+    save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);
+    write_text_file(ck.pointer(), std::to_string(k) + "\n");
+    ck.remove(k - 1);
+    if (stop()) return false;
+    sys.emplace(restart_system<System>(c, model, s.params));
+  }
+  for (long k = 0; k < static_cast<long>(stages.size()); ++k) ck.remove(k);
+  std::filesystem::remove(ck.pointer());
+  return true;
 }
 
 }  // namespace
@@ -443,9 +520,10 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   // How far a run goes is not a parameter of its results: resuming may change it.
   std::string fingerprint_text;
   for (const auto& [k, v] : scene.used())
-    if (k != "run.stop_after_variants") fingerprint_text += k + "=" + v + "\n";
+    if (k.rfind("run.stop_after_", 0) != 0) fingerprint_text += k + "=" + v + "\n";
   const std::string fingerprint = parameter_fingerprint(fingerprint_text);
   if (!opts.resume) std::filesystem::remove_all(parts);
+  make_directories(parts);
 
   bool stopped = false;
   with_contact_model(s.contact, [&](const auto& model) {
@@ -465,7 +543,15 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     }
     Progress progress("preparation", static_cast<long>(s.variants.size() * (3 + s.targets.size())),
                       opts.progress);
-    long done = 0, prepared = 0;
+    long done = 0, prepared = 0, stages_run = 0;
+    const auto start = std::chrono::steady_clock::now();
+    const std::function<bool()> stop = [&] {
+      const double minutes =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+      ++stages_run;
+      return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) ||
+             (s.stop_after_minutes > 0 && minutes >= s.stop_after_minutes);
+    };
     for (const PrepVariant& v : s.variants) {
       const std::string part_name =
           "variant_" + std::to_string(&v - s.variants.data()) + (v.tag.empty() ? "" : "_" + v.tag);
@@ -477,9 +563,13 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         progress.update(done += static_cast<long>(3 + s.targets.size()));
         continue;
       }
-      if (s.stop_after_variants > 0 && prepared == s.stop_after_variants) {
+      const double minutes =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+      if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
+          (prepared > 0 && s.stop_after_minutes > 0 && minutes >= s.stop_after_minutes)) {
         std::cerr << "stopped after " << prepared
-                  << " variants (run.stop_after_variants); continue with --resume\n";
+                  << " variants (run.stop_after_variants / stop_after_minutes); continue with "
+                     "--resume\n";
         stopped = true;
         return;
       }
@@ -491,23 +581,33 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
       make_directories(dir);
       std::vector<double> targets = s.targets;
-      prepare(s, v, prep, part, progress, done, [&](const ConfigState& c, double ratio, double I) {
-        // The target this configuration was saved at (the closest listed value).
-        double target = targets[0];
-        for (double t : targets)
-          if (std::fabs(t - c.phi) < std::fabs(target - c.phi)) target = t;
-        char name[64];
-        std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
-        write_config(dir + name, c);
-        part.add_config(dir + name);
-        analyse(s, c, prep,
-                {{"mu_preparation", mu},
-                 {"seed", static_cast<double>(v.seed)},
-                 {"ekin_over_epot", ratio},
-                 {"inertial_number_preparation", I},
-                 {"phi_target", target}},
-                v.tag, part);
-      });
+      const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
+      const bool finished = prepare(s, v, prep, part, progress, done, ck, stop,
+                                    [&](const ConfigState& c, double ratio, double I) {
+                                      // The target this configuration was saved at (the closest
+                                      // listed value).
+                                      double target = targets[0];
+                                      for (double t : targets)
+                                        if (std::fabs(t - c.phi) < std::fabs(target - c.phi))
+                                          target = t;
+                                      char name[64];
+                                      std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
+                                      write_config(dir + name, c);
+                                      part.add_config(dir + name);
+                                      analyse(s, c, prep,
+                                              {{"mu_preparation", mu},
+                                               {"seed", static_cast<double>(v.seed)},
+                                               {"ekin_over_epot", ratio},
+                                               {"inertial_number_preparation", I},
+                                               {"phi_target", target}},
+                                              v.tag, part);
+                                    });
+      if (!finished) {
+        std::cerr << "stopped at a checkpoint (run.stop_after_stages / stop_after_minutes); "
+                     "continue with --resume\n";
+        stopped = true;
+        return;
+      }
       save_moduli_part(parts, part_name, fingerprint, part);
       out.append(part);
     }

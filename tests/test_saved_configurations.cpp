@@ -241,3 +241,32 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
   EXPECT_EQ(a.reals("/table/mu_preparation"), (std::vector<double>{0.0, 0.5}));
   std::filesystem::remove_all(root);
 }
+
+TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqualsUninterrupted) {
+  const auto root = std::filesystem::temp_directory_path() / "granular_stage_resume_test";
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  const std::string text = std::string(kPrepare) + "mu = [0.0, 0.5]\n" + kCommon;
+
+  opts.out_dir = (root / "straight").string();
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  // Stopped inside the first compression, then inside the second variant's, then finished.
+  opts.out_dir = (root / "interrupted").string();
+  run_elastic_moduli(scene(text + "stop_after_stages = 2\n", "study.toml"), opts);
+  ASSERT_TRUE(std::filesystem::exists(root / "interrupted" / "variants" / "variant_0_mu0_stage"));
+  opts.resume = true;
+  run_elastic_moduli(scene(text + "stop_after_stages = 20\n", "study.toml"), opts);
+  EXPECT_TRUE(std::filesystem::exists(root / "interrupted" / "variants" / "variant_0_mu0.index"));
+  EXPECT_TRUE(std::filesystem::exists(root / "interrupted" / "variants" / "variant_1_mu0.5_stage"));
+  EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "results.h5"));
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+
+  const H5Reader a((root / "straight" / "results.h5").string());
+  const H5Reader b((root / "interrupted" / "results.h5").string());
+  for (const char* name : {"/table/K_star", "/table/G_star", "/table/M_star", "/table/z_corrected",
+                           "/table/ekin_over_epot", "/preparation/phi", "/preparation/pressure"})
+    EXPECT_EQ(a.reals(name), b.reals(name)) << name;
+  EXPECT_EQ(a.reals("/table/K_star").size(), 2u);
+  std::filesystem::remove_all(root);
+}
