@@ -47,12 +47,17 @@ int main(int argc, char** argv) {
   std::string scene_path, out_dir;
   int threads = 0;
   bool quiet = false, resume = false;
+  double stop_after_minutes = 0;
   run->add_option("scene", scene_path, "scene file (TOML)")->required()->check(CLI::ExistingFile);
   run->add_option("--out", out_dir, "output directory (default out/<scene file name>)");
   run->add_option("--threads", threads, "host threads (default: all cores)")
       ->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no progress lines");
   run->add_flag("--resume", resume, "continue from the checkpoint in the output directory");
+  run->add_option("--stop-after-minutes", stop_after_minutes,
+                  "stop at the first checkpoint after this wall time (elastic_moduli); "
+                  "continue with --resume")
+      ->check(CLI::NonNegativeNumber);
 
   auto* list = app.add_subcommand("scenes", "list the scene drivers");
 
@@ -106,6 +111,7 @@ int main(int argc, char** argv) {
         out_dir.empty() ? "out/" + std::filesystem::path(scene_path).stem().string() : out_dir;
     opts.progress = !quiet;
     opts.resume = resume;
+    opts.stop_after_minutes = stop_after_minutes;
     const granular::SceneEntry* entry = nullptr;
     for (const auto& e : granular::scene_registry())
       if (name == e.name) entry = &e;

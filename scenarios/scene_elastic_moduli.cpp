@@ -80,9 +80,8 @@ struct Setup {
   long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
   bool keep_friction = false, halving = false;
   // How much of the preparation this run does before it stops at a checkpoint (0: all):
-  // variants, stages (a 0.02 step in phi, a relaxation or a saved configuration), minutes.
+  // variants, stages (a 0.02 step in phi, a relaxation or a saved configuration).
   long stop_after_variants = 0, stop_after_stages = 0;
-  double stop_after_minutes = 0;
   std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
   std::vector<double> amplitudes;  // amplitude sweep (empty: none)
 };
@@ -99,10 +98,8 @@ Setup read_setup(const SceneFile& scene) {
   s.params.max_overlap = scene.real("run.max_overlap", 0.5);
   s.stop_after_variants = scene.integer("run.stop_after_variants", 0);
   s.stop_after_stages = scene.integer("run.stop_after_stages", 0);
-  s.stop_after_minutes = scene.real("run.stop_after_minutes", 0.0);
   scene.require(s.stop_after_variants >= 0, "run.stop_after_variants", "must not be negative");
   scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
-  scene.require(s.stop_after_minutes >= 0, "run.stop_after_minutes", "must not be negative");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
   s.amplitude = scene.real("probe.amplitude", 3e-6);
@@ -550,7 +547,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
       ++stages_run;
       return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) ||
-             (s.stop_after_minutes > 0 && minutes >= s.stop_after_minutes);
+             (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes);
     };
     for (const PrepVariant& v : s.variants) {
       const std::string part_name =
@@ -566,9 +563,9 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       const double minutes =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
       if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
-          (prepared > 0 && s.stop_after_minutes > 0 && minutes >= s.stop_after_minutes)) {
+          (prepared > 0 && opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes)) {
         std::cerr << "stopped after " << prepared
-                  << " variants (run.stop_after_variants / stop_after_minutes); continue with "
+                  << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
                      "--resume\n";
         stopped = true;
         return;
@@ -603,7 +600,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                                               v.tag, part);
                                     });
       if (!finished) {
-        std::cerr << "stopped at a checkpoint (run.stop_after_stages / stop_after_minutes); "
+        std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
                      "continue with --resume\n";
         stopped = true;
         return;

@@ -12,6 +12,9 @@ struct RunOptions {
   bool progress = true;  // progress lines on stderr
   bool resume = false;   // continue from <out_dir>/checkpoint.h5 when the scene supports it
   bool charts = true;    // draw the PNG charts after the data is written
+  // Wall-clock budget: a scene that checkpoints stops at its first checkpoint after this
+  // many minutes (0: no budget); the run is continued with --resume.
+  double stop_after_minutes = 0;
 };
 
 using SceneRunner = void (*)(const SceneFile&, const RunOptions&);
