@@ -334,6 +334,17 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
         {"rho", th.rho},
         {"zeta", th.zeta}};
     row.insert(values.begin(), values.end());
+    // Structure of the configuration: contact-number histogram, fabric tensor, and the
+    // pressure carried by normal and by tangential contact forces.
+    const char* comp[6] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+    for (int q = 0; q < 7; ++q)
+      row["contact_fraction_" + std::to_string(q) + (q == 6 ? "_or_more" : "")] =
+          m.contact_histogram[q];
+    for (int q = 0; q < 6; ++q) row[std::string("fabric_") + comp[q]] = m.fabric[q];
+    row["pressure_normal_star"] =
+        (m.stress_normal[0] + m.stress_normal[1] + m.stress_normal[2]) / 3 * scale;
+    row["pressure_tangential_star"] =
+        (m.stress_tangential[0] + m.stress_tangential[1] + m.stress_tangential[2]) / 3 * scale;
     out.add_row(tag, row);
     std::cerr << "phi " << m.phi << (ratio >= 0 ? "  kt/kn " + std::to_string(ratio) : "") << ": Z "
               << m.z_corrected << "  K* " << mod.K * scale << "  G* " << mod.G * scale
@@ -515,7 +526,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   // Finished preparation variants are checkpointed here; a fresh run starts without them.
   const std::string parts = opts.out_dir + "/variants";
   // How far a run goes is not a parameter of its results: resuming may change it.
-  std::string fingerprint_text;
+  // The layout version of the checkpointed outputs is part of it too.
+  std::string fingerprint_text = "moduli outputs v2\n";
   for (const auto& [k, v] : scene.used())
     if (k.rfind("run.stop_after_", 0) != 0) fingerprint_text += k + "=" + v + "\n";
   const std::string fingerprint = parameter_fingerprint(fingerprint_text);

@@ -239,6 +239,18 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
     EXPECT_EQ(a.reals(name), b.reals(name)) << name;
   }
   EXPECT_EQ(a.reals("/table/mu_preparation"), (std::vector<double>{0.0, 0.5}));
+  // The structure columns close: contact fractions sum to one, and the normal and
+  // tangential parts of the pressure add up to the pressure.
+  for (size_t r = 0; r < 2; ++r) {
+    double sum = 0;
+    for (const char* q : {"0", "1", "2", "3", "4", "5", "6_or_more"})
+      sum += a.reals(std::string("/table/contact_fraction_") + q)[r];
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    EXPECT_NEAR(a.reals("/table/pressure_normal_star")[r] +
+                    a.reals("/table/pressure_tangential_star")[r],
+                a.reals("/table/pressure_star")[r], 1e-9 * a.reals("/table/pressure_star")[r]);
+    EXPECT_GT(a.reals("/table/fabric_xx")[r], 0.0);
+  }
   std::filesystem::remove_all(root);
 }
 
