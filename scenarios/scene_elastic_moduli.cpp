@@ -531,7 +531,11 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   for (const auto& [k, v] : scene.used())
     if (k.rfind("run.stop_after_", 0) != 0) fingerprint_text += k + "=" + v + "\n";
   const std::string fingerprint = parameter_fingerprint(fingerprint_text);
-  if (!opts.resume) std::filesystem::remove_all(parts);
+  // Never drop hours of preparation silently: a fresh run into a directory that holds
+  // checkpoints of an unfinished study is refused.
+  if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
+    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
+                     "--resume, or remove that directory (or choose another --out) to start over");
   make_directories(parts);
 
   bool stopped = false;

@@ -222,6 +222,8 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
   EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "results.h5"));
   EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "summary.json"));
   ASSERT_TRUE(std::filesystem::exists(root / "interrupted" / "variants"));
+  // A fresh run does not overwrite the checkpoints of an unfinished study.
+  EXPECT_THROW(run_elastic_moduli(scene(text, "study.toml"), opts), InputError);
   // A checkpoint is only taken up by the scene that wrote it.
   opts.resume = true;
   std::string other = text;
@@ -246,9 +248,9 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
     for (const char* q : {"0", "1", "2", "3", "4", "5", "6_or_more"})
       sum += a.reals(std::string("/table/contact_fraction_") + q)[r];
     EXPECT_NEAR(sum, 1.0, 1e-12);
-    EXPECT_NEAR(a.reals("/table/pressure_normal_star")[r] +
-                    a.reals("/table/pressure_tangential_star")[r],
-                a.reals("/table/pressure_star")[r], 1e-9 * a.reals("/table/pressure_star")[r]);
+    EXPECT_NEAR(
+        a.reals("/table/pressure_normal_star")[r] + a.reals("/table/pressure_tangential_star")[r],
+        a.reals("/table/pressure_star")[r], 1e-9 * a.reals("/table/pressure_star")[r]);
     EXPECT_GT(a.reals("/table/fabric_xx")[r], 0.0);
   }
   std::filesystem::remove_all(root);
