@@ -71,7 +71,7 @@ struct Setup {
   DemParams params;
   std::vector<PrepVariant> variants;
   std::string start_from;  // probe this saved configuration instead of preparing
-  double phi0 = 0.5, phi_max = 0.82, rate = 0, min_rate = 0, prep_inertial = 0;
+  double phi0 = 0.5, phi_max = 0.82, rate = 0, min_rate = 0, prep_inertial = 0, gas_rate = 0;
   bool loading_branch = false;
   std::vector<double> targets;
   double relax_ratio = 1e-8;
@@ -142,6 +142,11 @@ Setup read_setup(const SceneFile& scene) {
   s.rate = scene.real("preparation.volumetric_strain_rate");
   s.prep_inertial = scene.real("preparation.inertial_number", 0.0);
   s.min_rate = scene.real("preparation.min_volumetric_strain_rate", s.rate / 20);
+  // The gas below phi_0 has no contact network to keep quasi-static (its pressure is tiny,
+  // so an inertial-number rule would crawl at the minimum rate) and is relaxed to zero
+  // pressure afterwards: it is compressed at this constant rate.
+  s.gas_rate = scene.real("preparation.gas_strain_rate", s.rate);
+  scene.require(s.gas_rate > 0, "preparation.gas_strain_rate", "must be positive");
   const std::string branch = scene.text("preparation.branch", "unloading");
   scene.require(branch == "unloading" || branch == "loading", "preparation.branch",
                 "must be \"unloading\" (decompression from phi_max) or \"loading\"");
@@ -444,6 +449,10 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     if (s.prep_inertial > 0) f = [&, sign](const Measurements& m) { return sign * rate_of(m) / 3; };
     strain_to_phi(*sys, target, sign * s.rate / 3, 500, sample, f);
   };
+  auto compress_gas = [&](double target) {
+    rate_now = s.gas_rate;
+    strain_to_phi(*sys, target, -s.gas_rate / 3, 500, sample);
+  };
   auto save = [&] {
     const double ratio = relax(*sys, s.relax_ratio, s.relax_max);
     const Measurements m = sys->measure();
@@ -459,7 +468,10 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
       stages.push_back({[&strain, t, sign] { strain(t, sign); }, false});
     stages.push_back({[&strain, to, sign] { strain(to, sign); }, ends_step});
   };
-  add_strain(s.gas.phi, s.phi0, -1, true);  // 2. compress to phi_0
+  // 2. compress the gas to phi_0
+  for (double t = s.gas.phi + 0.02; s.phi0 - t > 1e-12; t += 0.02)
+    stages.push_back({[&compress_gas, t] { compress_gas(t); }, false});
+  stages.push_back({[&compress_gas, &s] { compress_gas(s.phi0); }, true});
   stages.push_back({[&] { relax(*sys, s.relax_ratio, s.relax_max); }, true});  // 3. relax
   std::vector<double> sorted = s.targets;
   double from = s.phi0;
