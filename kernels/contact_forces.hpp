@@ -115,6 +115,7 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
   const ParticleViews<ExecSpace> pv(p);
   auto f = p.f, torque = p.torque;
   auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
+  auto owned_end = nl.owned_end();
   const PeriodicBox b = box;
   const Model m = model;
   const double gb = damping.translational, gr = damping.rotational;
@@ -130,10 +131,8 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
         const double r3[3] = {rate[0], rate[1], rate[2]};
         const Body bi = load_body(pv, i, rot);
-        const int id_i = pv.id(i);
-        for (int k = offsets(i); k < offsets(i + 1); ++k) {
+        for (int k = offsets(i); k < owned_end(i); ++k) {  // the contacts i owns
           const int j = neighbors(k);
-          if (pv.id(j) < id_i) continue;  // the other particle owns this contact
           double rx, ry, rz, r2;
           if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
             // Not touching: no force, and the contact's history is forgotten. Most such
@@ -171,18 +170,17 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         double qi[3] = {0, 0, 0};
         if constexpr (rot)
           for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
-        const int id_i = pv.id(i);
-        for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          if (pv.id(neighbors(k)) > id_i) {
-            for (int d = 0; d < 3; ++d) fi[d] += pair(k, d);
-            if constexpr (rot)
-              for (int d = 0; d < 3; ++d) qi[d] += pair(k, 3 + d);
-          } else {
-            const int o = mirror(k);
-            for (int d = 0; d < 3; ++d) fi[d] -= pair(o, d);
-            if constexpr (rot)
-              for (int d = 0; d < 3; ++d) qi[d] += pair(o, 6 + d);
-          }
+        const int own = owned_end(i);
+        for (int k = offsets(i); k < own; ++k) {
+          for (int d = 0; d < 3; ++d) fi[d] += pair(k, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(k, 3 + d);
+        }
+        for (int k = own; k < offsets(i + 1); ++k) {
+          const int o = mirror(k);
+          for (int d = 0; d < 3; ++d) fi[d] -= pair(o, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(o, 6 + d);
         }
         for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
         if constexpr (rot)

@@ -82,6 +82,10 @@ class NeighborList {
   // For entry k = (i, j): the entry (j, i). Lets the pair owner (i < j) compute a contact
   // once and both particles gather it in a fixed order.
   const int_view& mirror() const { return mirror_; }
+  // Each particle's entries come owned first: entries offsets(i) .. owned_end(i) - 1 are the
+  // partners with a higher identity (contacts i owns), the rest those with a lower one. The
+  // force loops then need no identity look-ups to tell them apart.
+  const int_view& owned_end() const { return owned_end_; }  // n
   // Particles in cell order (cells in z, y, x order; index order inside a cell): a
   // space-filling order that keeps neighbours close in memory.
   const int_view& cell_order() const { return cell_particles_; }
@@ -108,7 +112,7 @@ class NeighborList {
   long builds_ = 0;
   double a_max_ = 0.0;
   double built_len_[3] = {1, 1, 1};
-  int_view offsets_, neighbors_, mirror_;
+  int_view offsets_, neighbors_, mirror_, owned_end_;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
   int nc_[3] = {1, 1, 1};
   typename Particles<ExecSpace>::vec_view x_ref_;
@@ -149,6 +153,7 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
     cell_of_ = int_view("neighbor::cell_of", n);
     cell_particles_ = int_view("neighbor::cell_particles", n);
     offsets_ = int_view("neighbor::offsets", n + 1);
+    owned_end_ = int_view("neighbor::owned_end", n);
     x_ref_ = typename Particles<ExecSpace>::vec_view("neighbor::x_ref", n);
   }
   auto cell_of = cell_of_, cell_start = cell_start_, cell_count = cell_count_;
@@ -244,11 +249,20 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   }
   auto neighbors = neighbors_;
   auto mirror = mirror_;
+  auto owned_end = owned_end_;
+  auto id = p.id;
   Kokkos::parallel_for(
       "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
+        const int id_i = id(i);
         int k = offsets(i);
-        visit(i, [&](int j) { neighbors(k++) = j; });
+        visit(i, [&](int j) {
+          if (id(j) > id_i) neighbors(k++) = j;
+        });
+        owned_end(i) = k;
+        visit(i, [&](int j) {
+          if (id(j) < id_i) neighbors(k++) = j;
+        });
       });
   Kokkos::parallel_for(
       "neighbor::NeighborList::mirror", Kokkos::RangePolicy<ExecSpace>(0, n),
