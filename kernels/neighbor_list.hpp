@@ -224,14 +224,22 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles,
                                      b, skin_,  nc_[0],  nc_[1],     nc_[2]};
 
-  // count -> scan -> fill: exact capacity, no overflow to detect.
+  // count -> scan -> fill: exact capacity, no overflow to detect. The count pass also
+  // counts the owned partners (higher identity), so the fill writes both groups at once.
   auto offsets = offsets_;
+  auto owned_end = owned_end_;
+  auto id = p.id;
   Kokkos::parallel_for(
       "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
-        int count = 0;
-        visit(i, [&](int) { ++count; });
+        const int id_i = id(i);
+        int count = 0, owned = 0;
+        visit(i, [&](int j) {
+          ++count;
+          owned += id(j) > id_i ? 1 : 0;
+        });
         offsets(i) = count;
+        owned_end(i) = owned;
       });
   int total = 0;
   Kokkos::parallel_scan(
@@ -249,19 +257,17 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   }
   auto neighbors = neighbors_;
   auto mirror = mirror_;
-  auto owned_end = owned_end_;
-  auto id = p.id;
   Kokkos::parallel_for(
       "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
         const int id_i = id(i);
-        int k = offsets(i);
+        int ko = offsets(i), kp = offsets(i) + owned_end(i);
+        owned_end(i) = kp;
         visit(i, [&](int j) {
-          if (id(j) > id_i) neighbors(k++) = j;
-        });
-        owned_end(i) = k;
-        visit(i, [&](int j) {
-          if (id(j) < id_i) neighbors(k++) = j;
+          if (id(j) > id_i)
+            neighbors(ko++) = j;
+          else
+            neighbors(kp++) = j;
         });
       });
   Kokkos::parallel_for(
