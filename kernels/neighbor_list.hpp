@@ -276,7 +276,11 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
         for (int k = offsets(i); k < offsets(i + 1); ++k) {
           const int j = neighbors(k);
           int m = -1;
-          for (int q = offsets(j); q < offsets(j + 1); ++q)
+          // i sits in the half of j's entries opposite to the half j sits in of i's.
+          const bool owned = k < owned_end(i);
+          const int q0 = owned ? owned_end(j) : offsets(j);
+          const int q1 = owned ? offsets(j + 1) : owned_end(j);
+          for (int q = q0; q < q1; ++q)
             if (neighbors(q) == i) {
               m = q;
               break;

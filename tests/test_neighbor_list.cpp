@@ -1,6 +1,7 @@
 // Neighbour list against an O(N^2) brute-force search with periodic images, for a
 // polydisperse packing after random displacements and after box compression; and the
-// skin criterion: while no rebuild is requested, no touching pair is missing.
+// skin criterion: while no rebuild is requested, no touching pair is missing; the owned-first
+// order and the mirror entries the force loops rely on.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -56,6 +57,34 @@ std::vector<std::set<int>> listed(const NeighborList<Exec>& nl, int n) {
   return out;
 }
 
+// Structure the force loops rely on: each particle's entries hold the partners with a
+// higher identity first (up to owned_end), and mirror(k) is the entry of the same pair in
+// the partner's list.
+template <class Exec>
+void check_owned_first_and_mirror(const NeighborList<Exec>& nl, const Particles<Exec>& p) {
+  const auto h = Kokkos::HostSpace();
+  auto off = Kokkos::create_mirror_view_and_copy(h, nl.offsets());
+  auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
+  auto mir = Kokkos::create_mirror_view_and_copy(h, nl.mirror());
+  auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
+  auto id = Kokkos::create_mirror_view_and_copy(h, p.id);
+  long owned = 0;
+  for (int i = 0; i < p.n; ++i) {
+    ASSERT_GE(own(i), off(i));
+    ASSERT_LE(own(i), off(i + 1));
+    owned += own(i) - off(i);
+    for (int k = off(i); k < off(i + 1); ++k) {
+      const int j = nb(k), m = mir(k);
+      EXPECT_EQ(k<own(i), id(j)> id(i)) << "entry " << k << " of particle " << i;
+      ASSERT_GE(m, off(j));
+      ASSERT_LT(m, off(j + 1));
+      EXPECT_EQ(nb(m), i);
+      EXPECT_EQ(mir(m), k);
+    }
+  }
+  EXPECT_EQ(2 * owned, static_cast<long>(nl.num_entries()));  // every pair owned once
+}
+
 template <class Exec>
 void displace(Particles<Exec>& p, const PeriodicBox& box, double amplitude, std::uint64_t seed) {
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
@@ -88,10 +117,12 @@ TYPED_TEST(NeighborListTest, MatchesBruteForceWithPeriodicImagesAfterDisplacemen
   NeighborList<Exec> nl(skin);
   nl.build(p, box);
   EXPECT_EQ(listed(nl, p.n), brute_force(p, box, skin));
+  check_owned_first_and_mirror(nl, p);
 
   displace(p, box, 0.7, 11);  // large moves: many particles cross periodic faces
   nl.build(p, box);
   EXPECT_EQ(listed(nl, p.n), brute_force(p, box, skin));
+  check_owned_first_and_mirror(nl, p);
 
   const double rate[3] = {-0.2, -0.1, -0.15};
   apply_affine_strain(p, nl.reference(), box, rate, 1.0);
