@@ -572,12 +572,14 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                       opts.progress);
     long done = 0, prepared = 0, stages_run = 0;
     const auto start = std::chrono::steady_clock::now();
-    const std::function<bool()> stop = [&] {
+    auto out_of_time = [&] {
       const double minutes =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+      return opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes;
+    };
+    const std::function<bool()> stop = [&] {
       ++stages_run;
-      return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) ||
-             (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes);
+      return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
     };
     for (const PrepVariant& v : s.variants) {
       const std::string part_name =
@@ -590,10 +592,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         progress.update(done += static_cast<long>(3 + s.targets.size()));
         continue;
       }
-      const double minutes =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
       if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
-          (prepared > 0 && opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes)) {
+          (prepared > 0 && out_of_time())) {
         std::cerr << "stopped after " << prepared
                   << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
                      "--resume\n";
