@@ -12,6 +12,7 @@ class Progress {
   ~Progress();
   void update(long step, const std::string& extra = "");
   void finish();
+  bool enabled() const { return enabled_; }
 
  private:
   std::string phase_;

@@ -504,11 +504,26 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
                 << k + 1 << " of " << stages.size() << "\n";
     }
   }
+  // One line per stage: protocol steps last up to hours in a full study, and the progress
+  // line only moves when one ends.
+  const auto started = std::chrono::steady_clock::now();
+  auto log_stage = [&](long k, const Measurements& m) {
+    if (!progress.enabled()) return;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    char line[160];
+    std::snprintf(line, sizeof line, "variant %s: stage %ld/%zu done, phi %.4f, P %.4g, %.0fs\n",
+                  v.tag.empty() ? ck.name.c_str() : v.tag.c_str(), k + 1, stages.size(), m.phi,
+                  m.pressure, seconds);
+    std::cerr << line;
+  };
   for (long k = first; k < static_cast<long>(stages.size()); ++k) {
     stages[k].first();
     if (stages[k].second) progress.update(++done);
     if (k + 1 == static_cast<long>(stages.size())) break;  // the variant's part follows
-    const ConfigState c = snapshot(*sys, host.density, sys->measure().pressure);
+    const Measurements m = sys->measure();
+    log_stage(k, m);
+    const ConfigState c = snapshot(*sys, host.density, m.pressure);
     write_config(ck.state(k), c);
     save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);
     write_text_file(ck.pointer(), std::to_string(k) + "\n");
