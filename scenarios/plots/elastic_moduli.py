@@ -1,6 +1,7 @@
 """Charts of the elastic_moduli scene: K*, G* against phi Z with EMT and FT predictions
 (one panel row per preparation friction / probing stiffness ratio), Z and chi against phi,
 moduli against probe amplitude (amplitude sweeps), and the moduli scatter against N."""
+import os
 import sys
 
 import h5py
@@ -27,22 +28,28 @@ def groups(t):
 
 
 series = groups(t)
+
+
+def label_of(key):
+    """Legend text of a series: only the parameters that vary between series."""
+    label = []
+    if key[0] >= 0:
+        label.append("mu %g" % key[0])
+    if len({k[1] for k in series}) > 1:
+        label.append("kt/kn %g" % key[1])
+    if len({k[2] for k in series}) > 1:
+        label.append("N %d" % key[2])
+    return ", ".join(label) or "simulation"
+
+
 fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for ax, m in zip(axes, ("K", "G")):
     for n, (key, idx) in enumerate(sorted(series.items())):
         idx = np.array(idx)
         x = t["phi"][idx] * t["z_corrected"][idx]
         o = np.argsort(x)
-        label = []
-        if key[0] >= 0:
-            label.append("mu %g" % key[0])
-        if len({k[1] for k in series}) > 1:
-            label.append("kt/kn %g" % key[1])
-        if len({k[2] for k in series}) > 1:
-            label.append("N %d" % key[2])
-        label = ", ".join(label) or "simulation"
         c = "C%d" % n
-        ax.plot(x[o], t[m + "_star"][idx][o], "o", color=c, label=label)
+        ax.plot(x[o], t[m + "_star"][idx][o], "o", color=c, label=label_of(key))
         ax.plot(x[o], t[m + "_emt"][idx][o], "-", color=c, lw=0.8,
                 label="EMT" if n == 0 else None)
         ax.plot(x[o], t[m + "_ft2"][idx][o], "-.", color=c, lw=0.8,
@@ -54,15 +61,36 @@ for ax, m in zip(axes, ("K", "G")):
     ax.legend(fontsize=7)
 save(fig, outdir, "moduli_vs_phiZ.png")
 
-fig, ax = plt.subplots(figsize=(5, 4))
-o = np.argsort(t["phi"])
-ax.plot(t["phi"][o], t["z_corrected"][o], "o", label="Z (non-rattlers)")
-ax2 = ax.twinx()
-ax2.plot(t["phi"][o], t["chi"][o], "s", color="C1", label="chi")
-ax.set_xlabel("phi")
-ax.set_ylabel("Z")
-ax2.set_ylabel("chi")
+fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+for n, (key, idx) in enumerate(sorted(series.items())):
+    idx = np.array(idx)
+    o = idx[np.argsort(t["phi"][idx])]
+    axes[0].plot(t["phi"][o], t["z_corrected"][o], "o-", color="C%d" % n, label=label_of(key))
+    axes[1].plot(t["phi"][o], t["chi"][o], "s-", color="C%d" % n, label=label_of(key))
+axes[0].set_ylabel("Z (non-rattlers)")
+axes[1].set_ylabel("chi = <(Z - Zbar)^2> / Zbar^2")
+for ax in axes:
+    ax.set_xlabel("phi")
+    ax.legend(fontsize=7)
 save(fig, outdir, "coordination_vs_phi.png")
+
+# The per-configuration table as markdown, for reading without HDF5 tools.
+columns = [("phi", "phi", "%.4f"), ("z_corrected", "Z", "%.3f"), ("chi", "chi", "%.4f"),
+           ("rho", "rho", "%.3f"), ("zeta", "zeta", "%.3f"), ("pressure_star", "P*", "%.3e"),
+           ("K_star", "K*", "%.4f"), ("G_star", "G*", "%.4f"), ("K_emt", "K* EMT", "%.4f"),
+           ("G_emt", "G* EMT", "%.4f"), ("K_ft2", "K* FT2", "%.4f"), ("G_ft2", "G* FT2", "%.4f"),
+           ("M_over_K_plus_4G_3", "M/(K+4G/3)", "%.4f")]
+columns = [c for c in columns if c[0] in t]
+lines = ["| series | " + " | ".join(c[1] for c in columns) + " |",
+         "|---" * (len(columns) + 1) + "|"]
+for key, idx in sorted(series.items()):
+    for i in sorted(idx, key=lambda i: -t["phi"][i]):
+        lines.append("| %s | " % label_of(key) + " | ".join(c[2] % t[c[0]][i] for c in columns)
+                     + " |")
+tmp = outdir + "/.table.md.partial"
+with open(tmp, "w") as f:
+    f.write("\n".join(lines) + "\n")
+os.replace(tmp, outdir + "/table.md")
 
 if sweeps:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
