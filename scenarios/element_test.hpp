@@ -46,7 +46,8 @@ long strain_to_phi(System& sys, double target, double rate, long every,
 
 // Constant-volume relaxation until E_kin/E_pot < ratio (or max_steps). Returns the ratio.
 template <class System>
-double relax(System& sys, double ratio, long max_steps, long every = 500) {
+double relax(System& sys, double ratio, long max_steps, bool stop_if_unjammed = false,
+             long every = 500) {
   sys.set_strain_rate(0, 0, 0);
   double r = 1e300;
   for (long done = 0; done < max_steps; done += every) {
@@ -55,6 +56,10 @@ double relax(System& sys, double ratio, long max_steps, long every = 500) {
     sys.check_health(m);
     r = m.epot > 0 ? m.ekin / m.epot : 0.0;
     if (r < ratio) break;
+    // Below jamming both energies decay towards zero and their ratio need not fall: once no
+    // particle keeps the threshold number of contacts, relaxing longer cannot give the
+    // configuration a load-bearing network (its moduli are zero).
+    if (stop_if_unjammed && m.z_corrected == 0) break;
   }
   return r;
 }

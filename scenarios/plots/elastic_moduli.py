@@ -46,6 +46,9 @@ fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for ax, m in zip(axes, ("K", "G")):
     for n, (key, idx) in enumerate(sorted(series.items())):
         idx = np.array(idx)
+        idx = idx[t["z_corrected"][idx] > 0]  # unjammed configurations have no moduli
+        if len(idx) == 0:
+            continue
         x = t["phi"][idx] * t["z_corrected"][idx]
         o = np.argsort(x)
         c = "C%d" % n
@@ -85,8 +88,10 @@ lines = ["| series | " + " | ".join(c[1] for c in columns) + " |",
          "|---" * (len(columns) + 1) + "|"]
 for key, idx in sorted(series.items()):
     for i in sorted(idx, key=lambda i: -t["phi"][i]):
-        lines.append("| %s | " % label_of(key) + " | ".join(c[2] % t[c[0]][i] for c in columns)
-                     + " |")
+        cells = [c[2] % t[c[0]][i] for c in columns]
+        if t["z_corrected"][i] == 0:
+            cells = cells[:2] + ["unjammed"] * (len(cells) - 2)
+        lines.append("| %s | " % label_of(key) + " | ".join(cells) + " |")
 tmp = outdir + "/.table.md.partial"
 with open(tmp, "w") as f:
     f.write("\n".join(lines) + "\n")
