@@ -289,10 +289,10 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
     const TheoryResult thc = moduli_theory(ti);
     double dK_a = kNaN, dG_a = kNaN, dM_a = kNaN, dK_r = kNaN, dG_r = kNaN, dM_r = kNaN;
     // Below jamming (no particle keeps the threshold number of contacts) the moduli vanish
-    // and their relative change under halving means nothing.
+    // and their relative change under halving means nothing. Halving: half the amplitude at
+    // the same rate; the same amplitude at half the rate.
     const bool jammed = m.z_corrected > 0;
-    if (s.halving &&
-        jammed) {  // half the amplitude at the same rate; the same amplitude at half the rate
+    if (s.halving && jammed) {
       const Moduli ha = probe_config(c, model, s.params, s.amplitude / 2, std::max(1L, steps / 2),
                                      s.probe_relax, nullptr);
       const Moduli hr =
@@ -493,6 +493,7 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
       add_strain(from, t, +1, false), stages.push_back({save, true}), from = t;
   }
 
+  const std::string label = v.tag.empty() ? ck.name : v.tag;  // in log lines
   long first = 0;
   if (ck.resume) {
     std::ifstream in(ck.pointer());
@@ -505,8 +506,8 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
       for (long q = 0; q <= k; ++q) done += stages[q].second ? 1 : 0;
       progress.update(done);
       first = k + 1;
-      std::cerr << "variant " << (v.tag.empty() ? ck.name : v.tag) << ": continuing after stage "
-                << k + 1 << " of " << stages.size() << "\n";
+      std::cerr << "variant " << label << ": continuing after stage " << k + 1 << " of "
+                << stages.size() << "\n";
     }
   }
   // One line per stage: protocol steps last up to hours in a full study, and the progress
@@ -518,8 +519,7 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     char line[160];
     std::snprintf(line, sizeof line, "variant %s: stage %ld/%zu done, phi %.4f, P %.4g, %.0fs\n",
-                  v.tag.empty() ? ck.name.c_str() : v.tag.c_str(), k + 1, stages.size(), m.phi,
-                  m.pressure, seconds);
+                  label.c_str(), k + 1, stages.size(), m.phi, m.pressure, seconds);
     std::cerr << line;
   };
   for (long k = first; k < static_cast<long>(stages.size()); ++k) {
@@ -686,9 +686,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     hc["max_rel_change_half_amplitude"] = worst_a;
     hc["max_rel_change_half_rate"] = worst_r;
     hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
-    double unjammed = 0;
-    for (double v : z) unjammed += v > 0 ? 0 : 1;
-    hc["unjammed_configurations_left_out"] = unjammed;
+    hc["unjammed_configurations_left_out"] =
+        static_cast<double>(std::count(z.begin(), z.end(), 0.0));
   }
   // Scatter of the moduli over seeds at each size and target (system-size study).
   if (out.table.count("phi_target") && s.variants.size() > 1) {
