@@ -56,10 +56,10 @@ double relax(System& sys, double ratio, long max_steps, bool stop_if_unjammed = 
     sys.check_health(m);
     r = m.epot > 0 ? m.ekin / m.epot : 0.0;
     if (r < ratio) break;
-    // Below jamming both energies decay towards zero and their ratio need not fall: once no
-    // particle keeps the threshold number of contacts, relaxing longer cannot give the
-    // configuration a load-bearing network (its moduli are zero).
-    if (stop_if_unjammed && m.z_corrected == 0) break;
+    // Below jamming both energies decay towards zero and their ratio need not fall: once the
+    // contact network has come apart, relaxing longer cannot give the configuration a
+    // load-bearing network (its moduli are zero).
+    if (stop_if_unjammed && !is_jammed(m)) break;
   }
   return r;
 }

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "core/output.hpp"
 #include "scenarios/config_state.hpp"
@@ -282,5 +284,86 @@ TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqua
                            "/table/ekin_over_epot", "/preparation/phi", "/preparation/pressure"})
     EXPECT_EQ(a.reals(name), b.reals(name)) << name;
   EXPECT_EQ(a.reals("/table/K_star").size(), 2u);
+  std::filesystem::remove_all(root);
+}
+
+// Relaxing a configuration below jamming: both energies decay and their ratio need not fall,
+// so the relaxation asked to stop there returns at its first check once the contact network
+// has come apart, while a jammed packing relaxes on under the same request.
+TEST(SavedConfigurations, RelaxationStopsBelowJammingButNotAboveIt) {
+  std::vector<double> density;
+  auto jammed = compressed_packing(density);
+  ASSERT_TRUE(is_jammed(jammed.measure()));
+  long before = jammed.steps();
+  relax(jammed, 1e-30, 2000, true);
+  EXPECT_EQ(jammed.steps() - before, 2000);  // the flag does not cut a jammed packing short
+
+  // Two copies of one loose state (Kokkos views would be shared by a copy of the system).
+  auto loose = compressed_packing(density);
+  auto unflagged = compressed_packing(density);
+  strain_to_phi(loose, 0.50, 3e-2 / 3, 500, nullptr);
+  strain_to_phi(unflagged, 0.50, 3e-2 / 3, 500, nullptr);
+  const Measurements m = loose.measure();
+  EXPECT_FALSE(is_jammed(m));
+  before = loose.steps();
+  relax(loose, 1e-30, 20000, true);
+  EXPECT_EQ(loose.steps() - before, 500);
+  // Without the flag the energy ratio alone does not end it.
+  before = unflagged.steps();
+  const double r = relax(unflagged, 1e-30, 2000, false);
+  EXPECT_EQ(unflagged.steps() - before, 2000);
+  EXPECT_GT(r, 1e-30);
+}
+
+// A few particles keeping the threshold number of contacts do not make a network: a state is
+// jammed while at most half the particles are rattlers (jammed packings keep <= 15 %).
+TEST(SavedConfigurations, JammedMeansMostParticlesKeepTheContactThreshold) {
+  Measurements m;
+  m.particles = 100, m.z_corrected = 4.2;
+  m.rattlers = 15;
+  EXPECT_TRUE(is_jammed(m));
+  m.rattlers = 50;
+  EXPECT_TRUE(is_jammed(m));
+  m.rattlers = 51;
+  EXPECT_FALSE(is_jammed(m));
+  m.rattlers = 100, m.z_corrected = 0;
+  EXPECT_FALSE(is_jammed(m));
+}
+
+// A study whose unloading branch reaches below jamming: the unjammed configuration is
+// reported with zero moduli without being probed (no reversal residual), skips the halving
+// probes, and the halving criterion is taken over the jammed configurations only.
+TEST(SavedConfigurations, UnjammedConfigurationIsNotProbedAndLeftOutOfHalvingCheck) {
+  const auto root = std::filesystem::temp_directory_path() / "granular_unjammed_test";
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  opts.out_dir = root.string();
+  std::string text = std::string(kPrepare) + kCommon;
+  text.replace(text.find("targets = [0.68]"), 16, "targets = [0.68, 0.52]");
+  text.replace(text.find("[probe]"), 7, "[probe]\nhalving_check = true");
+  text.replace(text.find("relax_max_steps = 2000"), 22, "relax_max_steps = 200000");
+  run_elastic_moduli(scene(text, "unjammed.toml"), opts);
+  const std::string dir = root.string();
+  const auto jammed = column(dir, "jammed"), phi = column(dir, "phi"), K = column(dir, "K_star"),
+             G = column(dir, "G_star"), rev = column(dir, "isotropic_reversal_residual"),
+             half = column(dir, "halving_amplitude_rel_change_G");
+  ASSERT_EQ(jammed.size(), 2u);
+  EXPECT_NEAR(phi[0], 0.68, 1e-4);
+  EXPECT_EQ(jammed[0], 1.0);
+  EXPECT_GT(K[0], 0.0);
+  EXPECT_TRUE(std::isfinite(half[0]));
+  EXPECT_NEAR(phi[1], 0.52, 1e-4);
+  EXPECT_EQ(jammed[1], 0.0);
+  EXPECT_EQ(K[1], 0.0);
+  EXPECT_EQ(G[1], 0.0);
+  EXPECT_TRUE(std::isnan(rev[1]));   // not probed
+  EXPECT_TRUE(std::isnan(half[1]));  // no halving probes
+  std::ifstream f(root / "summary.json");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string summary = ss.str();
+  EXPECT_NE(summary.find("\"unjammed_configurations_left_out\": 1"), std::string::npos)
+      << summary.substr(summary.find("halving_check"), 300);
   std::filesystem::remove_all(root);
 }

@@ -28,6 +28,8 @@ def groups(t):
 
 
 series = groups(t)
+# Outputs written before the "jammed" column marked unjammed states by Z = 0.
+jammed = t["jammed"] > 0 if "jammed" in t else t["z_corrected"] > 0
 
 
 def label_of(key):
@@ -46,7 +48,7 @@ fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for ax, m in zip(axes, ("K", "G")):
     for n, (key, idx) in enumerate(sorted(series.items())):
         idx = np.array(idx)
-        idx = idx[t["z_corrected"][idx] > 0]  # unjammed configurations have no moduli
+        idx = idx[jammed[idx]]  # unjammed configurations have no moduli
         if len(idx) == 0:
             continue
         x = t["phi"][idx] * t["z_corrected"][idx]
@@ -89,7 +91,7 @@ lines = ["| series | " + " | ".join(c[1] for c in columns) + " |",
 for key, idx in sorted(series.items()):
     for i in sorted(idx, key=lambda i: -t["phi"][i]):
         cells = [c[2] % t[c[0]][i] for c in columns]
-        if t["z_corrected"][i] == 0:
+        if not jammed[i]:
             cells = cells[:2] + ["unjammed"] * (len(cells) - 2)
         lines.append("| %s | " % label_of(key) + " | ".join(cells) + " |")
 tmp = outdir + "/.table.md.partial"
