@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <vector>
 
 #include "kernels/dem_system.hpp"
 
@@ -111,26 +112,49 @@ ModeResult probe_mode(System& sys, const std::array<double, 3>& pattern, double 
   return r;
 }
 
-// K from the isotropic mode, G from pure shear (compress x, stretch y), M from uniaxial x.
-inline Moduli moduli_from(const ModeResult& iso, const ModeResult& shear, const ModeResult& uni) {
+// K from the isotropic mode; G from pure-shear modes (compress axis a, stretch axis b) and M
+// from uniaxial modes (along axis a), each the mean over the modes given. One shear plane and
+// one axis give M = K + 4G/3 only for an isotropic response; the means over the three planes
+// and the three axes give it for any linear response (with C the normal-strain block of the
+// stiffness: K = sum_ab C_ab / 9, mean M = sum_a C_aa / 3, G_ab = (C_aa + C_bb - C_ab - C_ba)/4).
+struct ShearMode {
+  const ModeResult* r;
+  int a, b;
+};
+struct UniaxialMode {
+  const ModeResult* r;
+  int a;
+};
+inline Moduli moduli_from(const ModeResult& iso, const std::vector<ShearMode>& shear,
+                          const std::vector<UniaxialMode>& uni) {
   Moduli out;
   auto p = [](const double* s) { return (s[0] + s[1] + s[2]) / 3.0; };
-  auto d = [](const double* s) { return s[0] - s[1]; };
   const Measurements &a = iso.before, &b = iso.after;
   const double ev = iso.eps[0] + iso.eps[1] + iso.eps[2];
   out.K = (b.pressure - a.pressure) / ev;
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
   out.eta_K = iso.na.eta_ratio, out.eta_K_per_contact = iso.na.eta;
-  const Measurements &c = shear.before, &e = shear.after;
-  const double ed = 2 * (shear.eps[0] - shear.eps[1]);
-  out.G = (d(e.stress) - d(c.stress)) / ed;
-  out.G_n = (d(e.stress_normal) - d(c.stress_normal)) / ed;
-  out.G_t = (d(e.stress_tangential) - d(c.stress_tangential)) / ed;
-  out.eta_G = shear.na.eta_ratio;
-  out.M = (uni.after.stress[0] - uni.before.stress[0]) / uni.eps[0];
-  out.eta_M = uni.na.eta_ratio;
+  const double ns = static_cast<double>(shear.size()), nu = static_cast<double>(uni.size());
+  for (const ShearMode& m : shear) {
+    const Measurements &c = m.r->before, &e = m.r->after;
+    auto d = [&m](const double* s) { return s[m.a] - s[m.b]; };
+    const double ed = 2 * (m.r->eps[m.a] - m.r->eps[m.b]);
+    out.G += (d(e.stress) - d(c.stress)) / ed / ns;
+    out.G_n += (d(e.stress_normal) - d(c.stress_normal)) / ed / ns;
+    out.G_t += (d(e.stress_tangential) - d(c.stress_tangential)) / ed / ns;
+    out.eta_G += m.r->na.eta_ratio / ns;
+  }
+  for (const UniaxialMode& m : uni) {
+    out.M += (m.r->after.stress[m.a] - m.r->before.stress[m.a]) / m.r->eps[m.a] / nu;
+    out.eta_M += m.r->na.eta_ratio / nu;
+  }
   return out;
+}
+
+// G from pure shear compressing x and stretching y, M from uniaxial x.
+inline Moduli moduli_from(const ModeResult& iso, const ModeResult& shear, const ModeResult& uni) {
+  return moduli_from(iso, {{&shear, 0, 1}}, {{&uni, 0}});
 }
 
 const std::array<double, 3> kIsotropic = {1, 1, 1}, kPureShear = {1, -1, 0}, kUniaxial = {1, 0, 0};
@@ -161,11 +185,16 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
 // moduli; the particle displacements of that run are likewise subtracted before the
 // non-affine fluctuation is computed. The isotropic probe is then reversed for the
 // reversal test.
+//
+// orientations = 3 probes pure shear in the three planes (xy, yz, zx) and uniaxial strain
+// along the three axes and reports the means (see moduli_from); 1 probes xy and x only.
 template <class Factory>
 Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strain_steps,
-                               long relax_steps, double* reversal_residual = nullptr) {
-  ModeResult r[3];
-  const std::array<double, 3> modes[3] = {kIsotropic, kPureShear, kUniaxial};
+                               long relax_steps, double* reversal_residual = nullptr,
+                               int orientations = 1) {
+  std::vector<std::array<double, 3>> modes = {kIsotropic, kPureShear, kUniaxial};
+  if (orientations == 3) modes.insert(modes.end(), {{0, 1, -1}, {-1, 0, 1}, {0, 1, 0}, {0, 0, 1}});
+  std::vector<ModeResult> r(modes.size());
   Measurements reference, reference2;  // after one and after two probe durations
   typename decltype(make())::particles_type::vec_view drift;
   {
@@ -180,7 +209,7 @@ Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strai
       reference2 = sys.measure();
     }
   }
-  for (int m = 0; m < 3; ++m) {
+  for (size_t m = 0; m < modes.size(); ++m) {
     auto sys = make();
     r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps, drift);
     r[m].before = reference;
@@ -190,7 +219,10 @@ Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strai
                            (r[0].after.pressure - reference.pressure);
     }
   }
-  return moduli_from(r[0], r[1], r[2]);
+  if (orientations != 3) return moduli_from(r[0], r[1], r[2]);
+  // Modes 1, 3, 4: compress x / y / z and stretch y / z / x; modes 2, 5, 6: along x, y, z.
+  return moduli_from(r[0], {{&r[1], 0, 1}, {&r[3], 1, 2}, {&r[4], 2, 0}},
+                     {{&r[2], 0}, {&r[5], 1}, {&r[6], 2}});
 }
 
 }  // namespace granular

@@ -79,6 +79,7 @@ struct Setup {
   double amplitude = 3e-6, probe_inertial = 0;
   long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
   bool keep_friction = false, halving = false;
+  int orientations = 1;  // shear planes and uniaxial axes probed (1: xy and x; 3: all)
   // How much of the preparation this run does before it stops at a checkpoint (0: all):
   // variants, stages (a 0.02 step in phi, a relaxation or a saved configuration).
   long stop_after_variants = 0, stop_after_stages = 0;
@@ -109,6 +110,9 @@ Setup read_setup(const SceneFile& scene) {
   s.max_strain_steps = scene.integer("probe.max_strain_steps", 200000);
   s.keep_friction = scene.flag("probe.keep_friction", false);
   s.halving = scene.flag("probe.halving_check", false);
+  s.orientations = static_cast<int>(scene.integer("probe.orientations", 1));
+  scene.require(s.orientations == 1 || s.orientations == 3, "probe.orientations",
+                "must be 1 (shear in xy, uniaxial along x) or 3 (all planes and axes, averaged)");
   s.kt_ratios = scene.reals("probe.kt_over_kn", {});
   s.amplitudes = scene.reals("probe.amplitudes", {});
   scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
@@ -243,10 +247,10 @@ long steps_for(const Setup& s, double amplitude, double base_rate) {
 // Probes a saved configuration: each mode restarts from it, so probes do not disturb one
 // another and give bitwise the same result whether the state is in memory or read back.
 template <class Model>
-Moduli probe_config(const ConfigState& c, const Model& model, const DemParams& params,
-                    double amplitude, long steps, long relax, double* reversal) {
-  auto make = [&] { return restart_system<DemSystem<Exec, Model>>(c, model, params); };
-  return probe_moduli_restarting(make, amplitude, steps, relax, reversal);
+Moduli probe_config(const ConfigState& c, const Model& model, const Setup& s, double amplitude,
+                    long steps, double* reversal) {
+  auto make = [&] { return restart_system<DemSystem<Exec, Model>>(c, model, s.params); };
+  return probe_moduli_restarting(make, amplitude, steps, s.probe_relax, reversal, s.orientations);
 }
 
 double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }
@@ -282,9 +286,7 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   for (double ratio : ratios) {
     const Model model = ratio >= 0 ? with_tangential_stiffness(probe_base, ratio * kn) : probe_base;
     double reversal = kNaN;
-    const Moduli mod =
-        jammed ? probe_config(c, model, s.params, s.amplitude, steps, s.probe_relax, &reversal)
-               : Moduli{};
+    const Moduli mod = jammed ? probe_config(c, model, s, s.amplitude, steps, &reversal) : Moduli{};
     std::map<std::string, double> row = context;
     const double kt_kn = stiffness_ratio(s.contact, kn, ratio);
     TheoryInput ti;
@@ -296,10 +298,9 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
     // Below jamming the relative change of the moduli under halving means nothing.
     // Halving: half the amplitude at the same rate; the same amplitude at half the rate.
     if (s.halving && jammed) {
-      const Moduli ha = probe_config(c, model, s.params, s.amplitude / 2, std::max(1L, steps / 2),
-                                     s.probe_relax, nullptr);
-      const Moduli hr =
-          probe_config(c, model, s.params, s.amplitude, 2 * steps, s.probe_relax, nullptr);
+      const Moduli ha =
+          probe_config(c, model, s, s.amplitude / 2, std::max(1L, steps / 2), nullptr);
+      const Moduli hr = probe_config(c, model, s, s.amplitude, 2 * steps, nullptr);
       dK_a = rel_change(ha.K, mod.K), dG_a = rel_change(ha.G, mod.G),
       dM_a = rel_change(ha.M, mod.M);
       dK_r = rel_change(hr.K, mod.K), dG_r = rel_change(hr.G, mod.G),
@@ -375,7 +376,7 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   for (double a : s.amplitudes) {
     const long n = steps_for(s, a, base_rate);
     double reversal = 0;
-    const Moduli mod = probe_config(c, probe_base, s.params, a, n, s.probe_relax, &reversal);
+    const Moduli mod = probe_config(c, probe_base, s, a, n, &reversal);
     const double vals[] = {a,
                            mod.K * scale,
                            mod.G * scale,
