@@ -41,6 +41,9 @@ void ModuliOutputs::append(const ModuliOutputs& part) {
   for (size_t i = 0; i < n; ++i) {
     std::map<std::string, double> row;
     for (const auto& [k, v] : part.table) row[k] = v.at(i);
+    // Checkpoints written before the "jammed" column marked unjammed rows by Z = 0.
+    if (!part.table.count("jammed") && row.count("z_corrected"))
+      row["jammed"] = row["z_corrected"] > 0 ? 1.0 : 0.0;
     add_row(part.table_tags[i], row);
   }
   for (const auto& [k, v] : part.prep) prep[k].insert(prep[k].end(), v.begin(), v.end());

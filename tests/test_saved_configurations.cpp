@@ -12,6 +12,7 @@
 #include "core/output.hpp"
 #include "scenarios/config_state.hpp"
 #include "scenarios/element_test.hpp"
+#include "scenarios/moduli_outputs.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -413,4 +414,17 @@ TEST(SavedConfigurations, ModuliAveragedOverOrientationsDoNotDependOnAxisLabels)
   // identity by several per cent; the means meet it up to the probe's nonlinearity.
   EXPECT_GT(std::fabs(one_c.M / (one_c.K + 4 * one_c.G / 3) - 1.0), 0.03);
   EXPECT_NEAR(all_c.M / (all_c.K + 4 * all_c.G / 3), 1.0, 0.01);
+}
+
+// Outputs checkpointed before the "jammed" column existed resume into tables that have it
+// for every row (unjammed rows were those with Z = 0), so the columns stay aligned.
+TEST(SavedConfigurations, CheckpointWithoutJammedColumnResumesAligned) {
+  ModuliOutputs old_part, out;
+  old_part.add_row("", {{"phi", 0.70}, {"z_corrected", 6.5}});
+  old_part.add_row("", {{"phi", 0.66}, {"z_corrected", 0.0}});
+  out.append(old_part);
+  out.add_row("", {{"phi", 0.65}, {"z_corrected", 0.0}, {"jammed", 0.0}});
+  ASSERT_EQ(out.table.at("jammed").size(), 3u);
+  EXPECT_EQ(out.table.at("jammed"), (std::vector<double>{1.0, 0.0, 0.0}));
+  EXPECT_EQ(out.table.at("phi").size(), 3u);
 }
