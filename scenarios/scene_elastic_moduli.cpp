@@ -683,12 +683,12 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     // amplitude or rate is halved: the elastic-plateau criterion is < 1 %.
     // Configurations below jamming have no elastic plateau.
     double worst_a = 0, worst_r = 0;
-    const auto& z = out.table.at("jammed");
+    const auto& jammed = out.table.at("jammed");
     for (const char* m : {"K", "G", "M"}) {
       const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
       const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
-      for (size_t i = 0; i < z.size(); ++i)
-        if (z[i] > 0) worst_a = std::max(worst_a, a[i]), worst_r = std::max(worst_r, r[i]);
+      for (size_t i = 0; i < jammed.size(); ++i)
+        if (jammed[i] > 0) worst_a = std::max(worst_a, a[i]), worst_r = std::max(worst_r, r[i]);
     }
     Json& hc = summary["halving_check"];
     hc = Json::object();
@@ -696,7 +696,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     hc["max_rel_change_half_rate"] = worst_r;
     hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
     hc["unjammed_configurations_left_out"] =
-        static_cast<double>(std::count(z.begin(), z.end(), 0.0));
+        static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
   }
   // Scatter of the moduli over seeds at each size and target (system-size study).
   if (out.table.count("phi_target") && s.variants.size() > 1) {
