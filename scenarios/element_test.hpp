@@ -154,7 +154,8 @@ inline Moduli moduli_from(const ModeResult& iso, const std::vector<ShearMode>& s
 
 // G from pure shear compressing x and stretching y, M from uniaxial x.
 inline Moduli moduli_from(const ModeResult& iso, const ModeResult& shear, const ModeResult& uni) {
-  return moduli_from(iso, {{&shear, 0, 1}}, {{&uni, 0}});
+  return moduli_from(iso, std::vector<ShearMode>{{&shear, 0, 1}},
+                     std::vector<UniaxialMode>{{&uni, 0}});
 }
 
 const std::array<double, 3> kIsotropic = {1, 1, 1}, kPureShear = {1, -1, 0}, kUniaxial = {1, 0, 0};
@@ -221,8 +222,10 @@ Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strai
   }
   if (orientations != 3) return moduli_from(r[0], r[1], r[2]);
   // Modes 1, 3, 4: compress x / y / z and stretch y / z / x; modes 2, 5, 6: along x, y, z.
-  return moduli_from(r[0], {{&r[1], 0, 1}, {&r[3], 1, 2}, {&r[4], 2, 0}},
-                     {{&r[2], 0}, {&r[5], 1}, {&r[6], 2}});
+  // Typed lists: a bare braced list could also initialise a ModeResult, which nvcc's front end
+  // reports as an ambiguous call.
+  return moduli_from(r[0], std::vector<ShearMode>{{&r[1], 0, 1}, {&r[3], 1, 2}, {&r[4], 2, 0}},
+                     std::vector<UniaxialMode>{{&r[2], 0}, {&r[5], 1}, {&r[6], 2}});
 }
 
 }  // namespace granular
