@@ -60,12 +60,31 @@ std::map<std::string, std::vector<double>> ModuliOutputs::sweep_columns(
   return cols;
 }
 
+namespace {
 std::string parameter_fingerprint(const std::string& text) {
   std::uint64_t h = 14695981039346656037ull;
   for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
   char buf[32];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
   return buf;
+}
+}  // namespace
+
+std::string moduli_parameters_fingerprint(const std::map<std::string, std::string>& used) {
+  // How far a run goes, and the overlap guard (it changes whether a run may go on, never its
+  // trajectory), are not parameters of its results: resuming may change them. Keys added
+  // after the layout version, at the default that reproduces the runs made before them, are
+  // left out as well, so checkpoints written before such a key existed stay resumable.
+  const std::map<std::string, std::string> later_keys_at_old_default = {
+      {"probe.orientations", "1"}};
+  std::string text = "moduli outputs v2\n";
+  for (const auto& [k, v] : used) {
+    const auto later = later_keys_at_old_default.find(k);
+    if (later != later_keys_at_old_default.end() && later->second == v) continue;
+    if (k.rfind("run.stop_after_", 0) == 0 || k == "run.max_overlap") continue;
+    text += k + "=" + v + "\n";
+  }
+  return parameter_fingerprint(text);
 }
 
 // Index lines: "fingerprint F", then "<kind> <name>" with kind table/prep/sweep/config/tag;

@@ -40,9 +40,9 @@ struct ModuliOutputs {
   std::map<std::string, std::vector<double>> sweep_columns(const std::string& group) const;
 };
 
-// Fingerprint of a scene's parameters (FNV-1a of their text), so a checkpoint is only
-// taken up by a run of the same scene.
-std::string parameter_fingerprint(const std::string& text);
+// Fingerprint (FNV-1a) of the scene parameters a moduli study used (key -> value text) that
+// decide its results, so a checkpoint is only taken up by a run of the same scene.
+std::string moduli_parameters_fingerprint(const std::map<std::string, std::string>& used);
 
 // <dir>/<name>.h5 holds the datasets, <dir>/<name>.index (written last) lists them with the
 // fingerprint: a variant counts as finished only when its index exists.

@@ -566,14 +566,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   Outputs out;
   // Finished preparation variants are checkpointed here; a fresh run starts without them.
   const std::string parts = opts.out_dir + "/variants";
-  // How far a run goes, and the overlap guard (it changes whether a run may go on, never
-  // its trajectory), are not parameters of its results: resuming may change them.
-  // The layout version of the checkpointed outputs is part of it too.
-  std::string fingerprint_text = "moduli outputs v2\n";
-  for (const auto& [k, v] : scene.used())
-    if (k.rfind("run.stop_after_", 0) != 0 && k != "run.max_overlap")
-      fingerprint_text += k + "=" + v + "\n";
-  const std::string fingerprint = parameter_fingerprint(fingerprint_text);
+  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
   // Never drop hours of preparation silently: a fresh run into a directory that holds
   // checkpoints of an unfinished study is refused.
   if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))

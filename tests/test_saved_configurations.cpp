@@ -428,3 +428,21 @@ TEST(SavedConfigurations, CheckpointWithoutJammedColumnResumesAligned) {
   EXPECT_EQ(out.table.at("jammed"), (std::vector<double>{1.0, 0.0, 0.0}));
   EXPECT_EQ(out.table.at("phi").size(), 3u);
 }
+
+TEST(SavedConfigurations, CheckpointFingerprintIgnoresLaterKeysAtTheirOldDefaultOnly) {
+  // A study checkpointed before probe.orientations existed used no such key; a newer run of
+  // the same scene notes its default (1), which reproduces the old runs, and must resume.
+  const std::map<std::string, std::string> before = {{"probe.amplitude", "1e-06"},
+                                                     {"system.particles", "4096"}};
+  auto with = [&](const std::string& k, const std::string& v) {
+    auto m = before;
+    m[k] = v;
+    return m;
+  };
+  const std::string f = moduli_parameters_fingerprint(before);
+  EXPECT_EQ(moduli_parameters_fingerprint(with("probe.orientations", "1")), f);
+  EXPECT_EQ(moduli_parameters_fingerprint(with("run.stop_after_minutes", "30")), f);
+  EXPECT_NE(moduli_parameters_fingerprint(with("probe.orientations", "3")), f);
+  EXPECT_NE(moduli_parameters_fingerprint(with("probe.amplitude", "2e-06")), f);
+  EXPECT_NE(moduli_parameters_fingerprint(with("probe.relax_steps", "100")), f);
+}
