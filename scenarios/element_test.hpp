@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <map>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/dem_system.hpp"
@@ -189,27 +191,54 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
 //
 // orientations = 3 probes pure shear in the three planes (xy, yz, zx) and uniaxial strain
 // along the three axes and reports the means (see moduli_from); 1 probes xy and x only.
-template <class Factory>
+//
+// The reference run depends only on the state, the model and its length, so probes of one
+// state and model may share it through `references` (an amplitude sweep whose step count
+// reaches its cap runs every larger amplitude for the same length): the moduli are bitwise
+// those of a probe that runs its own.
+template <class System>
+struct ReferenceRuns {
+  struct Run {
+    Measurements one, two;  // after one and after two probe durations
+    bool has_two = false;
+    typename System::particles_type::vec_view drift;  // displacements over the first
+  };
+  std::map<long, Run> by_length;  // keyed by strain_steps + relax_steps
+};
+
+template <class Factory, class System = std::decay_t<std::invoke_result_t<const Factory&>>>
 Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strain_steps,
                                long relax_steps, double* reversal_residual = nullptr,
-                               int orientations = 1) {
+                               int orientations = 1, ReferenceRuns<System>* references = nullptr) {
   std::vector<std::array<double, 3>> modes = {kIsotropic, kPureShear, kUniaxial};
   if (orientations == 3) modes.insert(modes.end(), {{0, 1, -1}, {-1, 0, 1}, {0, 1, 0}, {0, 0, 1}});
   std::vector<ModeResult> r(modes.size());
-  Measurements reference, reference2;  // after one and after two probe durations
-  typename decltype(make())::particles_type::vec_view drift;
-  {
+  const long length = strain_steps + relax_steps;
+  typename ReferenceRuns<System>::Run ref;
+  const typename ReferenceRuns<System>::Run* hit = nullptr;
+  if (references) {
+    const auto it = references->by_length.find(length);
+    if (it != references->by_length.end() && (it->second.has_two || !reversal_residual))
+      hit = &it->second;
+  }
+  if (hit) {
+    ref = *hit;
+  } else {
     auto sys = make();
     const auto x0 = positions_by_id(sys.particles());
-    sys.step(strain_steps + relax_steps);
-    reference = sys.measure();
-    drift = displacement_by_id<typename decltype(make())::execution_space>(
+    sys.step(length);
+    ref.one = sys.measure();
+    ref.drift = displacement_by_id<typename System::execution_space>(
         x0, positions_by_id(sys.particles()), sys.box());
     if (reversal_residual) {
-      sys.step(strain_steps + relax_steps);
-      reference2 = sys.measure();
+      sys.step(length);
+      ref.two = sys.measure();
+      ref.has_two = true;
     }
+    if (references) references->by_length[length] = ref;
   }
+  const Measurements &reference = ref.one, &reference2 = ref.two;
+  const auto& drift = ref.drift;
   for (size_t m = 0; m < modes.size(); ++m) {
     auto sys = make();
     r[m] = probe_mode(sys, modes[m], amplitude, strain_steps, relax_steps, drift);

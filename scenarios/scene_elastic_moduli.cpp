@@ -248,9 +248,11 @@ long steps_for(const Setup& s, double amplitude, double base_rate) {
 // another and give bitwise the same result whether the state is in memory or read back.
 template <class Model>
 Moduli probe_config(const ConfigState& c, const Model& model, const Setup& s, double amplitude,
-                    long steps, double* reversal) {
+                    long steps, double* reversal,
+                    ReferenceRuns<DemSystem<Exec, Model>>* references = nullptr) {
   auto make = [&] { return restart_system<DemSystem<Exec, Model>>(c, model, s.params); };
-  return probe_moduli_restarting(make, amplitude, steps, s.probe_relax, reversal, s.orientations);
+  return probe_moduli_restarting(make, amplitude, steps, s.probe_relax, reversal, s.orientations,
+                                 references);
 }
 
 double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }
@@ -372,11 +374,13 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   }
   if (s.amplitudes.empty() || !jammed) return;
   // Amplitude sweep at the base probing rate (bounded step counts), from the same state.
+  // The amplitudes whose step count reaches the cap share one reference run.
   std::map<std::string, std::vector<double>> sw;
+  ReferenceRuns<DemSystem<Exec, Model>> references;
   for (double a : s.amplitudes) {
     const long n = steps_for(s, a, base_rate);
     double reversal = 0;
-    const Moduli mod = probe_config(c, probe_base, s, a, n, &reversal);
+    const Moduli mod = probe_config(c, probe_base, s, a, n, &reversal, &references);
     const double vals[] = {a,
                            mod.K * scale,
                            mod.G * scale,

@@ -207,6 +207,42 @@ TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
   EXPECT_LT(std::fabs(b.K / a.K - 1.0), 0.02 * std::fabs(q.K / p.K - 1.0));
 }
 
+TEST(SavedConfigurations, SharedReferenceRunGivesBitwiseTheModuliOfOwnReferenceRun) {
+  // A drifting state, so the reference run matters: probes of the same length sharing it
+  // must give exactly what probes running their own give, reversal residual included.
+  std::vector<double> density;
+  auto sys = compressed_packing(density);
+  const ConfigState c = snapshot(sys, density, sys.measure().pressure);
+  const double inf = std::numeric_limits<double>::infinity();
+  const Frictional model{
+      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, inf, inf), {}};
+  auto make = [&] { return restart_system<DemSystem<Exec, Frictional>>(c, model, sys.params()); };
+  ReferenceRuns<DemSystem<Exec, Frictional>> shared;
+  // The first probe keeps no second reference state; the next one, with a reversal, needs it.
+  const Moduli a = probe_moduli_restarting(make, 2e-6, 200, 200, nullptr, 1, &shared);
+  double rev_b = 0, rev_c = 0, own_rev_b = 0, own_rev_c = 0;
+  const Moduli b = probe_moduli_restarting(make, 8e-6, 200, 200, &rev_b, 1, &shared);
+  const Moduli d = probe_moduli_restarting(make, 8e-6, 100, 300, &rev_c, 1, &shared);
+  const Moduli e = probe_moduli_restarting(make, 2e-6, 100, 100, nullptr, 1, &shared);
+  EXPECT_EQ(shared.by_length.size(), 2u);  // lengths 400 (a, b, d) and 200 (e)
+  const Moduli own_a = probe_moduli_restarting(make, 2e-6, 200, 200);
+  const Moduli own_b = probe_moduli_restarting(make, 8e-6, 200, 200, &own_rev_b);
+  const Moduli own_d = probe_moduli_restarting(make, 8e-6, 100, 300, &own_rev_c);
+  const Moduli own_e = probe_moduli_restarting(make, 2e-6, 100, 100);
+  const std::pair<Moduli, Moduli> pairs[] = {{a, own_a}, {b, own_b}, {d, own_d}, {e, own_e}};
+  for (const auto& [x, y] : pairs) {
+    EXPECT_EQ(x.K, y.K);
+    EXPECT_EQ(x.G, y.G);
+    EXPECT_EQ(x.M, y.M);
+    EXPECT_EQ(x.eta_K, y.eta_K);
+    EXPECT_EQ(x.eta_G, y.eta_G);
+  }
+  EXPECT_EQ(rev_b, own_rev_b);
+  EXPECT_EQ(rev_c, own_rev_c);
+  // Different probes of one length share the reference but not the result.
+  EXPECT_NE(b.K, d.K);
+}
+
 TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterruptedStudyBitwise) {
   const auto root = std::filesystem::temp_directory_path() / "granular_variant_resume_test";
   std::filesystem::remove_all(root);
