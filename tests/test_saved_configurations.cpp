@@ -178,15 +178,23 @@ TEST(SavedConfigurations, ProbingALoadedConfigurationGivesTheInRunModuliBitwise)
   std::filesystem::remove_all(root);
 }
 
-TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
-  // A packing just compressed, far from equilibrium: its stress drifts on its own.
+// A packing just compressed, far from equilibrium (its stress drifts on its own), saved as a
+// state; make() restores it with a frictional model that never slides.
+struct DriftingState {
   std::vector<double> density;
-  auto sys = compressed_packing(density);
-  const ConfigState c = snapshot(sys, density, sys.measure().pressure);
-  const double inf = std::numeric_limits<double>::infinity();
-  const Frictional model{
-      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, inf, inf), {}};
-  auto make = [&] { return restart_system<DemSystem<Exec, Frictional>>(c, model, sys.params()); };
+  DemSystem<Exec, Frictional> sys = compressed_packing(density);
+  ConfigState c = snapshot(sys, density, sys.measure().pressure);
+  Frictional model{LinearNormal::uniform(1e5, 1000),
+                   CoulombTangential::uniform(8e4, 200, INFINITY, INFINITY),
+                   {}};
+  DemSystem<Exec, Frictional> make() const {
+    return restart_system<DemSystem<Exec, Frictional>>(c, model, sys.params());
+  }
+};
+
+TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
+  const DriftingState state;
+  auto make = [&] { return state.make(); };
   const Moduli a = probe_moduli_restarting(make, 2e-6, 200, 200);
   const Moduli b = probe_moduli_restarting(make, 1e-6, 100, 200);  // half amplitude, same rate
   // 100 particles just compressed still gain and lose contacts during a probe, so the
@@ -210,13 +218,8 @@ TEST(SavedConfigurations, ReferenceRunRemovesRelaxationDriftFromProbedModuli) {
 TEST(SavedConfigurations, SharedReferenceRunGivesBitwiseTheModuliOfOwnReferenceRun) {
   // A drifting state, so the reference run matters: probes of the same length sharing it
   // must give exactly what probes running their own give, reversal residual included.
-  std::vector<double> density;
-  auto sys = compressed_packing(density);
-  const ConfigState c = snapshot(sys, density, sys.measure().pressure);
-  const double inf = std::numeric_limits<double>::infinity();
-  const Frictional model{
-      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, inf, inf), {}};
-  auto make = [&] { return restart_system<DemSystem<Exec, Frictional>>(c, model, sys.params()); };
+  const DriftingState state;
+  auto make = [&] { return state.make(); };
   ReferenceRuns<DemSystem<Exec, Frictional>> shared;
   // The first probe keeps no second reference state; the next one, with a reversal, needs it.
   const Moduli a = probe_moduli_restarting(make, 2e-6, 200, 200, nullptr, 1, &shared);
