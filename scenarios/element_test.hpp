@@ -199,8 +199,8 @@ Moduli probe_moduli(System& sys, double amplitude, long strain_steps, long relax
 template <class System>
 struct ReferenceRuns {
   struct Run {
+    int durations = 0;      // probe durations run: 0 (none yet), 1, or 2 (for the reversal)
     Measurements one, two;  // after one and after two probe durations
-    bool has_two = false;
     typename System::particles_type::vec_view drift;  // displacements over the first
   };
   std::map<long, Run> by_length;  // keyed by strain_steps + relax_steps
@@ -214,28 +214,21 @@ Moduli probe_moduli_restarting(const Factory& make, double amplitude, long strai
   if (orientations == 3) modes.insert(modes.end(), {{0, 1, -1}, {-1, 0, 1}, {0, 1, 0}, {0, 0, 1}});
   std::vector<ModeResult> r(modes.size());
   const long length = strain_steps + relax_steps;
-  typename ReferenceRuns<System>::Run ref;
-  const typename ReferenceRuns<System>::Run* hit = nullptr;
-  if (references) {
-    const auto it = references->by_length.find(length);
-    if (it != references->by_length.end() && (it->second.has_two || !reversal_residual))
-      hit = &it->second;
-  }
-  if (hit) {
-    ref = *hit;
-  } else {
+  typename ReferenceRuns<System>::Run own;
+  auto& ref = references ? references->by_length[length] : own;
+  const int needed = reversal_residual ? 2 : 1;
+  if (ref.durations < needed) {
     auto sys = make();
     const auto x0 = positions_by_id(sys.particles());
     sys.step(length);
     ref.one = sys.measure();
     ref.drift = displacement_by_id<typename System::execution_space>(
         x0, positions_by_id(sys.particles()), sys.box());
-    if (reversal_residual) {
+    if (needed == 2) {
       sys.step(length);
       ref.two = sys.measure();
-      ref.has_two = true;
     }
-    if (references) references->by_length[length] = ref;
+    ref.durations = needed;
   }
   const Measurements &reference = ref.one, &reference2 = ref.two;
   const auto& drift = ref.drift;

@@ -223,14 +223,14 @@ TEST(SavedConfigurations, SharedReferenceRunGivesBitwiseTheModuliOfOwnReferenceR
   ReferenceRuns<DemSystem<Exec, Frictional>> shared;
   // The first probe keeps no second reference state; the next one, with a reversal, needs it.
   const Moduli a = probe_moduli_restarting(make, 2e-6, 200, 200, nullptr, 1, &shared);
-  double rev_b = 0, rev_c = 0, own_rev_b = 0, own_rev_c = 0;
+  double rev_b = 0, rev_d = 0, own_rev_b = 0, own_rev_d = 0;
   const Moduli b = probe_moduli_restarting(make, 8e-6, 200, 200, &rev_b, 1, &shared);
-  const Moduli d = probe_moduli_restarting(make, 8e-6, 100, 300, &rev_c, 1, &shared);
+  const Moduli d = probe_moduli_restarting(make, 8e-6, 100, 300, &rev_d, 1, &shared);
   const Moduli e = probe_moduli_restarting(make, 2e-6, 100, 100, nullptr, 1, &shared);
   EXPECT_EQ(shared.by_length.size(), 2u);  // lengths 400 (a, b, d) and 200 (e)
   const Moduli own_a = probe_moduli_restarting(make, 2e-6, 200, 200);
   const Moduli own_b = probe_moduli_restarting(make, 8e-6, 200, 200, &own_rev_b);
-  const Moduli own_d = probe_moduli_restarting(make, 8e-6, 100, 300, &own_rev_c);
+  const Moduli own_d = probe_moduli_restarting(make, 8e-6, 100, 300, &own_rev_d);
   const Moduli own_e = probe_moduli_restarting(make, 2e-6, 100, 100);
   const std::pair<Moduli, Moduli> pairs[] = {{a, own_a}, {b, own_b}, {d, own_d}, {e, own_e}};
   for (const auto& [x, y] : pairs) {
@@ -241,7 +241,7 @@ TEST(SavedConfigurations, SharedReferenceRunGivesBitwiseTheModuliOfOwnReferenceR
     EXPECT_EQ(x.eta_G, y.eta_G);
   }
   EXPECT_EQ(rev_b, own_rev_b);
-  EXPECT_EQ(rev_c, own_rev_c);
+  EXPECT_EQ(rev_d, own_rev_d);
   // Different probes of one length share the reference but not the result.
   EXPECT_NE(b.K, d.K);
 }
