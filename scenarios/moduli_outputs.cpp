@@ -1,10 +1,12 @@
 #include "scenarios/moduli_outputs.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.hpp"
 
@@ -28,6 +30,44 @@ void ModuliOutputs::add_sweep(const SweepMeta& meta,
   }
   sweeps.push(j);
   sweep_meta.push_back(meta);
+}
+
+std::vector<SizeScatter> size_scatter(const std::map<std::string, std::vector<double>>& table) {
+  std::vector<SizeScatter> out;
+  for (const char* key : {"particles", "phi_target", "jammed", "K_star", "G_star"})
+    if (!table.count(key)) return out;
+  const auto& n = table.at("particles");
+  const auto& t = table.at("phi_target");
+  const auto& jammed = table.at("jammed");
+  const auto& K = table.at("K_star");
+  const auto& G = table.at("G_star");
+  const auto mu_col = table.find("mu_preparation");
+  // A NaN friction (not set per variant) cannot order a map key: it groups as -1.
+  const auto mu_of = [&](size_t i) {
+    const double m = mu_col == table.end() ? -1.0 : mu_col->second[i];
+    return std::isnan(m) ? -1.0 : m;
+  };
+  std::map<std::tuple<double, double, double>, std::vector<size_t>> groups;
+  for (size_t i = 0; i < n.size(); ++i)
+    if (jammed[i] > 0) groups[{mu_of(i), n[i], t[i]}].push_back(i);
+  bool repeated = false;
+  for (const auto& [key, rows] : groups) repeated = repeated || rows.size() > 1;
+  if (!repeated) return out;
+  for (const auto& [key, rows] : groups) {
+    SizeScatter e;
+    e.mu = std::get<0>(key) < 0 ? std::nan("") : std::get<0>(key);
+    e.particles = std::get<1>(key), e.phi_target = std::get<2>(key);
+    e.samples = static_cast<int>(rows.size());
+    for (size_t i : rows) e.K_mean += K[i], e.G_mean += G[i];
+    e.K_mean /= e.samples, e.G_mean /= e.samples;
+    for (size_t i : rows)
+      e.K_std += (K[i] - e.K_mean) * (K[i] - e.K_mean),
+          e.G_std += (G[i] - e.G_mean) * (G[i] - e.G_mean);
+    const double dof = e.samples > 1 ? e.samples - 1.0 : 1.0;
+    e.K_std = std::sqrt(e.K_std / dof), e.G_std = std::sqrt(e.G_std / dof);
+    out.push_back(e);
+  }
+  return out;
 }
 
 void ModuliOutputs::add_config(const std::string& path) {

@@ -40,6 +40,17 @@ struct ModuliOutputs {
   std::map<std::string, std::vector<double>> sweep_columns(const std::string& group) const;
 };
 
+// Scatter of K* and G* over the samples (seeds) of one preparation friction, size and target.
+struct SizeScatter {
+  double mu = 0, particles = 0, phi_target = 0;  // mu: NaN when the table has no such column
+  int samples = 0;
+  double K_mean = 0, K_std = 0, G_mean = 0, G_std = 0;  // std: sample standard deviation
+};
+// Groups the jammed rows of a study table by (mu_preparation, particles, phi_target). Empty
+// when no group holds two samples: a study without repeated seeds has no scatter to report,
+// and unjammed rows (no moduli) would only drag the means to zero.
+std::vector<SizeScatter> size_scatter(const std::map<std::string, std::vector<double>>& table);
+
 // Fingerprint (FNV-1a) of the scene parameters a moduli study used (key -> value text) that
 // decide its results, so a checkpoint is only taken up by a run of the same scene.
 std::string moduli_parameters_fingerprint(const std::map<std::string, std::string>& used);

@@ -463,6 +463,7 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     out.prep["variant"].push_back(static_cast<double>(&v - s.variants.data()));
   };
   auto strain = [&](double target, double sign) {
+    rate_now = s.rate;  // what the recorded series and I report (rate_of lowers it if adaptive)
     std::function<double(const Measurements&)> f = nullptr;
     if (s.prep_inertial > 0) f = [&, sign](const Measurements& m) { return sign * rate_of(m) / 3; };
     strain_to_phi(*sys, target, sign * s.rate / 3, 500, sample, f);
@@ -696,27 +697,20 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
   }
   // Scatter of the moduli over seeds at each size and target (system-size study).
-  if (out.table.count("phi_target") && s.variants.size() > 1) {
-    std::map<std::pair<double, double>, std::vector<std::pair<double, double>>> groups;
-    const auto& n = out.table.at("particles");
-    const auto& t = out.table.at("phi_target");
-    const auto& mu = out.table.at("mu_preparation");
-    for (size_t i = 0; i < n.size(); ++i)
-      if (mu[i] == mu[0] || std::isnan(mu[0]))
-        groups[{n[i], t[i]}].push_back({out.table.at("K_star")[i], out.table.at("G_star")[i]});
+  const std::vector<SizeScatter> scatter = size_scatter(out.table);
+  if (!scatter.empty()) {
+    bool several_mu = false;
+    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+    for (const SizeScatter& e : scatter) several_mu = several_mu || !same(e.mu, scatter[0].mu);
     Json sc = Json::array();
-    for (const auto& [key, vals] : groups) {
-      double mk = 0, mg = 0, vk = 0, vg = 0;
-      for (const auto& [k, g] : vals) mk += k, mg += g;
-      mk /= vals.size(), mg /= vals.size();
-      for (const auto& [k, g] : vals) vk += (k - mk) * (k - mk), vg += (g - mg) * (g - mg);
-      const double dof = vals.size() > 1 ? vals.size() - 1.0 : 1.0;
-      Json e = Json::object();
-      e["particles"] = key.first, e["phi_target"] = key.second;
-      e["samples"] = static_cast<double>(vals.size());
-      e["K_star_mean"] = mk, e["K_star_std"] = std::sqrt(vk / dof);
-      e["G_star_mean"] = mg, e["G_star_std"] = std::sqrt(vg / dof);
-      sc.push(e);
+    for (const SizeScatter& e : scatter) {
+      Json j = Json::object();
+      if (several_mu) j["mu_preparation"] = e.mu;
+      j["particles"] = e.particles, j["phi_target"] = e.phi_target;
+      j["samples"] = static_cast<double>(e.samples);
+      j["K_star_mean"] = e.K_mean, j["K_star_std"] = e.K_std;
+      j["G_star_mean"] = e.G_mean, j["G_star_std"] = e.G_std;
+      sc.push(j);
     }
     summary["size_scatter"] = sc;
   }

@@ -383,8 +383,31 @@ TEST(SavedConfigurations, UnjammedConfigurationIsNotProbedAndLeftOutOfHalvingChe
   text.replace(text.find("targets = [0.68]"), 16, "targets = [0.68, 0.52]");
   text.replace(text.find("[probe]"), 7, "[probe]\nhalving_check = true");
   text.replace(text.find("relax_max_steps = 2000"), 22, "relax_max_steps = 200000");
+  // A faster gas stage: what is recorded after it must be the rate then applied, 2e-2.
+  text.replace(text.find("targets ="), 9, "gas_strain_rate = 0.1\ntargets =");
   run_elastic_moduli(scene(text, "unjammed.toml"), opts);
   const std::string dir = root.string();
+  {
+    H5Reader h5(dir + "/results.h5");
+    const auto phi_s = h5.reals("/preparation/phi"),
+               rate_s = h5.reals("/preparation/volumetric_strain_rate"),
+               I_s = h5.reals("/preparation/inertial_number"),
+               P_s = h5.reals("/preparation/pressure");
+    double dbar = 0;  // I = rate dbar sqrt(rho / P) on the series gives the mean diameter
+    int after_gas = 0;
+    for (size_t i = 0; i < phi_s.size(); ++i) {
+      EXPECT_DOUBLE_EQ(rate_s[i], phi_s[i] > 0.5 + 1e-9 ? 2e-2 : 0.1) << "sample " << i;
+      if (phi_s[i] > 0.5 + 1e-9 && P_s[i] > 0)
+        dbar = I_s[i] * std::sqrt(P_s[i] / 2000) / rate_s[i], ++after_gas;
+    }
+    ASSERT_GT(after_gas, 0);
+    EXPECT_GT(dbar, 1.0);
+    EXPECT_LT(dbar, 3.0);
+    // The table's I at the saved configuration: P = P* k_n / dbar from the relaxed state.
+    const double P = column(dir, "pressure_star")[0] * column(dir, "kn_mean")[0] / dbar;
+    EXPECT_NEAR(column(dir, "inertial_number_preparation")[0], 2e-2 * dbar * std::sqrt(2000 / P),
+                1e-6 * column(dir, "inertial_number_preparation")[0]);
+  }
   const auto jammed = column(dir, "jammed"), phi = column(dir, "phi"), K = column(dir, "K_star"),
              G = column(dir, "G_star"), rev = column(dir, "isotropic_reversal_residual"),
              half = column(dir, "halving_amplitude_rel_change_G");
@@ -466,6 +489,45 @@ TEST(SavedConfigurations, CheckpointWithoutJammedColumnResumesAligned) {
   ASSERT_EQ(out.table.at("jammed").size(), 3u);
   EXPECT_EQ(out.table.at("jammed"), (std::vector<double>{1.0, 0.0, 0.0}));
   EXPECT_EQ(out.table.at("phi").size(), 3u);
+}
+
+// The system-size scatter: mean and sample standard deviation over the seeds of each
+// (friction, size, target), computed by hand here; unjammed rows carry no moduli and stay out.
+TEST(SavedConfigurations, SizeScatterIsSampleStdOverSeedsOfJammedRowsOnly) {
+  ModuliOutputs out;
+  const auto row = [&](double n, double jammed, double K, double G) {
+    out.add_row("", {{"mu_preparation", 0.5},
+                     {"particles", n},
+                     {"phi_target", 0.68},
+                     {"jammed", jammed},
+                     {"K_star", K},
+                     {"G_star", G}});
+  };
+  row(1000, 1, 0.40, 0.30), row(1000, 1, 0.42, 0.36), row(1000, 1, 0.44, 0.33);
+  row(1000, 0, 0.0, 0.0);  // unjammed seed
+  row(8000, 1, 0.39, 0.31), row(8000, 1, 0.41, 0.33);
+  const std::vector<SizeScatter> sc = size_scatter(out.table);
+  ASSERT_EQ(sc.size(), 2u);
+  EXPECT_EQ(sc[0].particles, 1000.0);
+  EXPECT_EQ(sc[0].samples, 3);
+  EXPECT_NEAR(sc[0].K_mean, 0.42, 1e-14);
+  EXPECT_NEAR(sc[0].K_std, 0.02, 1e-14);  // sqrt((0.02^2 + 0 + 0.02^2) / 2)
+  EXPECT_NEAR(sc[0].G_mean, 0.33, 1e-14);
+  EXPECT_NEAR(sc[0].G_std, 0.03, 1e-14);  // sqrt((0.03^2 + 0.03^2 + 0) / 2)
+  EXPECT_EQ(sc[1].particles, 8000.0);
+  EXPECT_EQ(sc[1].samples, 2);
+  EXPECT_NEAR(sc[1].K_std, std::sqrt(2 * 0.01 * 0.01), 1e-14);
+  EXPECT_EQ(sc[0].mu, 0.5);
+  // One seed per friction and target (a friction study): no scatter to report.
+  ModuliOutputs single;
+  for (double mu : {0.0, 0.5})
+    single.add_row("", {{"mu_preparation", mu},
+                        {"particles", 4096},
+                        {"phi_target", 0.68},
+                        {"jammed", 1},
+                        {"K_star", 0.4},
+                        {"G_star", 0.3}});
+  EXPECT_TRUE(size_scatter(single.table).empty());
 }
 
 TEST(SavedConfigurations, CheckpointFingerprintIgnoresLaterKeysAtTheirOldDefaultOnly) {
