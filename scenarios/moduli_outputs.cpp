@@ -42,20 +42,20 @@ std::vector<SizeScatter> size_scatter(const std::map<std::string, std::vector<do
   const auto& K = table.at("K_star");
   const auto& G = table.at("G_star");
   const auto mu_col = table.find("mu_preparation");
-  // A NaN friction (not set per variant) cannot order a map key: it groups as -1.
   const auto mu_of = [&](size_t i) {
-    const double m = mu_col == table.end() ? -1.0 : mu_col->second[i];
-    return std::isnan(m) ? -1.0 : m;
+    return mu_col == table.end() ? std::nan("") : mu_col->second[i];
   };
+  // A NaN friction (not set per variant) cannot order a map key: it groups as -1.
+  const auto mu_key = [&](size_t i) { return std::isnan(mu_of(i)) ? -1.0 : mu_of(i); };
   std::map<std::tuple<double, double, double>, std::vector<size_t>> groups;
   for (size_t i = 0; i < n.size(); ++i)
-    if (jammed[i] > 0) groups[{mu_of(i), n[i], t[i]}].push_back(i);
+    if (jammed[i] > 0) groups[{mu_key(i), n[i], t[i]}].push_back(i);
   bool repeated = false;
   for (const auto& [key, rows] : groups) repeated = repeated || rows.size() > 1;
   if (!repeated) return out;
   for (const auto& [key, rows] : groups) {
     SizeScatter e;
-    e.mu = std::get<0>(key) < 0 ? std::nan("") : std::get<0>(key);
+    e.mu = mu_of(rows[0]);
     e.particles = std::get<1>(key), e.phi_target = std::get<2>(key);
     e.samples = static_cast<int>(rows.size());
     for (size_t i : rows) e.K_mean += K[i], e.G_mean += G[i];
