@@ -498,7 +498,8 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     std::sort(sorted.begin(), sorted.end());
     for (double t : sorted)
       add_strain(from, t, -1, false), stages.push_back({save, true}), from = t;
-    add_strain(from, s.phi_max, -1, true);
+    // No compression to phi_max after the last target: nothing is saved on it, and a
+    // strongly cohesive packing that dense can run into the overlap limit.
   } else {
     add_strain(from, s.phi_max, -1, true);      // 4. compress to phi_max
     std::sort(sorted.rbegin(), sorted.rend());  // 5. unload, saving states
@@ -509,19 +510,30 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
 
   const std::string label = v.tag.empty() ? ck.name : v.tag;  // in log lines
   long first = 0;
-  if (ck.resume) {
+  long resumed = -1;  // the stage whose checkpoint the run continued from
+  if (ck.resume && std::filesystem::exists(ck.pointer())) {
     std::ifstream in(ck.pointer());
     long k = -1;
-    if (in >> k && k >= 0 && k < static_cast<long>(stages.size())) {
-      if (!load_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out))
-        throw InputError(ck.pointer() +
-                         ": the checkpoint it names is missing; run without --resume");
+    if (!(in >> k) || k < 0)
+      throw InputError(ck.pointer() + ": not a stage number; remove the file to start the " +
+                       "variant afresh, or run without --resume");
+    if (!load_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out))
+      throw InputError(ck.pointer() + ": the checkpoint it names is missing; run without --resume");
+    resumed = k;
+    const long last = static_cast<long>(stages.size()) - 1;
+    // A checkpoint at or past the last stage (written by a longer protocol, e.g. one that
+    // still compressed on after the last saved configuration) already holds every saved
+    // configuration: the preparation is complete.
+    first = std::min(k + 1, last + 1);
+    for (long q = 0; q < first; ++q) done += stages[q].second ? 1 : 0;
+    progress.update(done);
+    if (first <= last) {
       sys.emplace(restart_system<System>(read_config(ck.state(k)), model, s.params));
-      for (long q = 0; q <= k; ++q) done += stages[q].second ? 1 : 0;
-      progress.update(done);
-      first = k + 1;
       std::cerr << "variant " << label << ": continuing after stage " << k + 1 << " of "
                 << stages.size() << "\n";
+    } else {
+      std::cerr << "variant " << label << ": preparation complete in the checkpoint (stage "
+                << k + 1 << ")\n";
     }
   }
   // One line per stage: protocol steps last up to hours in a full study, and the progress
@@ -551,6 +563,7 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     sys.emplace(restart_system<System>(c, model, s.params));
   }
   for (long k = 0; k < static_cast<long>(stages.size()); ++k) ck.remove(k);
+  ck.remove(resumed);
   std::filesystem::remove(ck.pointer());
   return true;
 }
@@ -595,8 +608,10 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       out.add_config(s.start_from);
       return;
     }
-    Progress progress("preparation", static_cast<long>(s.variants.size() * (3 + s.targets.size())),
-                      opts.progress);
+    // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
+    // branch only) and one per saved configuration.
+    const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
+    Progress progress("preparation", static_cast<long>(s.variants.size() * steps), opts.progress);
     long done = 0, prepared = 0, stages_run = 0;
     const auto start = std::chrono::steady_clock::now();
     auto out_of_time = [&] {
@@ -616,7 +631,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         std::cerr << "variant " << (v.tag.empty() ? part_name : v.tag)
                   << ": taken from the checkpoint in " << parts << "\n";
         out.append(part);
-        progress.update(done += static_cast<long>(3 + s.targets.size()));
+        progress.update(done += static_cast<long>(steps));
         continue;
       }
       if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||

@@ -327,6 +327,61 @@ TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqua
   std::filesystem::remove_all(root);
 }
 
+// On the loading branch the compression ends at the densest target. A checkpoint whose
+// stage number lies at or past the last stage (left by a protocol with more stages, such as
+// one that compressed on to phi_max) holds every saved configuration: the resumed run takes
+// the preparation as complete and reruns nothing. A pointer that is not a stage number is an
+// error, not a silent fresh start.
+TEST(SavedConfigurations, CheckpointPastTheLastStageResumesAsCompletePreparation) {
+  const auto root = std::filesystem::temp_directory_path() / "granular_past_last_stage_test";
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  std::string prep = kPrepare;
+  const std::string targets = "targets = [0.68]\n";
+  prep.replace(prep.find(targets), targets.size(), "targets = [0.66, 0.7]\nbranch = \"loading\"\n");
+  const std::string text = prep + kCommon;
+
+  opts.out_dir = (root / "straight").string();
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  const H5Reader a((root / "straight" / "results.h5").string());
+  ASSERT_EQ(a.reals("/table/phi").size(), 2u);
+  // The loading branch ends at the densest target, not at phi_max = 0.72.
+  EXPECT_LT(a.reals("/preparation/phi").back(), 0.7 + 0.005);
+
+  // Stop right after the stage that saves phi = 0.66: gas stages (0.47, 0.49, 0.5), relax,
+  // strains 0.52 ... 0.66 (eight stages), save. Then relabel its checkpoint as a later stage's.
+  opts.out_dir = (root / "interrupted").string();
+  run_elastic_moduli(scene(text + "stop_after_stages = 13\n", "study.toml"), opts);
+  const auto dir = root / "interrupted" / "variants";
+  std::ifstream pointer(dir / "variant_0_stage");
+  long k = -1;
+  ASSERT_TRUE(pointer >> k);
+  pointer.close();
+  ASSERT_EQ(k, 12);
+  for (const char* ext : {"_state.h5", ".h5", ".index"})
+    std::filesystem::rename(dir / ("variant_0_stage12" + std::string(ext)),
+                            dir / ("variant_0_stage40" + std::string(ext)));
+  write_text_file((dir / "variant_0_stage").string(), "40\n");
+  opts.resume = true;
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  EXPECT_FALSE(std::filesystem::exists(dir));  // its checkpoints are cleaned up
+  const H5Reader b((root / "interrupted" / "results.h5").string());
+  // Only the configuration the checkpoint held: no stage ran again.
+  ASSERT_EQ(b.reals("/table/phi").size(), 1u);
+  ASSERT_EQ(b.reals("/table/jammed")[0], 1.0);
+  EXPECT_EQ(b.reals("/table/K_star")[0], a.reals("/table/K_star")[0]);
+  EXPECT_EQ(b.reals("/table/G_star")[0], a.reals("/table/G_star")[0]);
+
+  opts.out_dir = (root / "garbled").string();
+  opts.resume = false;
+  run_elastic_moduli(scene(text + "stop_after_stages = 3\n", "study.toml"), opts);
+  write_text_file((root / "garbled" / "variants" / "variant_0_stage").string(), "x\n");
+  opts.resume = true;
+  EXPECT_THROW(run_elastic_moduli(scene(text, "study.toml"), opts), InputError);
+  std::filesystem::remove_all(root);
+}
+
 // Relaxing a configuration below jamming: both energies decay and their ratio need not fall,
 // so the relaxation asked to stop there returns at its first check once the contact network
 // has come apart, while a jammed packing relaxes on under the same request.
