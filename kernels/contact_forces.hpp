@@ -17,7 +17,7 @@ struct Damping {
 
 // One particle's state in registers: loaded once for i, once per partner j.
 struct Body {
-  double x[3], v[3], w[3], a;
+  double x[3], v[3], w[3], a, m;
   int s;
 };
 
@@ -30,6 +30,7 @@ KOKKOS_FORCEINLINE_FUNCTION Body load_body(const Views& v, int i, bool rotations
     b.w[d] = rotations ? v.w(i, d) : 0.0;
   }
   b.a = v.radius(i);
+  b.m = v.mass(i);  // a dead load, removed by the compiler, for laws that do not use it
   b.s = v.species(i);
   return b;
 }
@@ -57,6 +58,8 @@ KOKKOS_FORCEINLINE_FUNCTION void pair_geometry(const Body& bi, const Body& bj, d
   s.n[0] = rx * inv, s.n[1] = ry * inv, s.n[2] = rz * inv;
   s.delta = s.ai + s.aj - r;
   s.si = bi.s, s.sj = bj.s;
+  s.mstar = bi.m * bj.m / (bi.m + bj.m);
+  s.wall = false;
   const double dv[3] = {bi.v[0] - bj.v[0] + rate[0] * rx, bi.v[1] - bj.v[1] + rate[1] * ry,
                         bi.v[2] - bj.v[2] + rate[2] * rz};
   const double vn = dot3(dv, s.n);
@@ -94,10 +97,10 @@ template <class ExecSpace>
 struct ParticleViews {
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double*[3], mem> x, v, w;
-  Kokkos::View<double*, mem> radius;
+  Kokkos::View<double*, mem> radius, mass;
   Kokkos::View<int*, mem> species, id;
   explicit ParticleViews(const Particles<ExecSpace>& p)
-      : x(p.x), v(p.v), w(p.w), radius(p.radius), species(p.species), id(p.id) {}
+      : x(p.x), v(p.v), w(p.w), radius(p.radius), mass(p.mass), species(p.species), id(p.id) {}
 };
 
 // Two passes. Pairs: the owner of each contact (the particle with the lower identity, which

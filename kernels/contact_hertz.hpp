@@ -21,7 +21,7 @@ struct HertzNormal {
   PairTable<Params> table;
 
   KOKKOS_INLINE_FUNCTION static double length(const Params& q, const PairState& s) {
-    return q.reduced_radius ? s.ai * s.aj / (s.ai + s.aj) : s.ai + s.aj;
+    return q.reduced_radius ? granular::reduced_radius(s) : pair_diameter(s);
   }
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
     const Params& q = table(s.si, s.sj);

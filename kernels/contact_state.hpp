@@ -28,9 +28,23 @@ struct PairState {
   double delta_dot;  // rate of overlap (approach speed)
   double vt[3];      // tangential velocity of i's contact point relative to j's
   double wrel[3];    // omega_i - omega_j
-  double ai, aj;     // radii
-  int si, sj;        // species
+  double ai, aj;     // radii (aj unused for a wall)
+  double mstar;      // reduced mass m_i m_j/(m_i + m_j); m_i for a wall (infinite mass)
+  int si, sj;        // species (sj: the wall's material slot for a wall)
+  bool wall;         // partner is a planar wall: infinite radius and mass
 };
+
+// Reduced radius R* = a_i a_j/(a_i + a_j); a wall has infinite radius, so R* = a_i exactly.
+// In the pair kernels `wall` is a constant false, so the branch folds away.
+KOKKOS_INLINE_FUNCTION double reduced_radius(const PairState& s) {
+  return s.wall ? s.ai : s.ai * s.aj / (s.ai + s.aj);
+}
+// The pair length d = a_i + a_j of the "stiffness" Hertz/Mindlin forms. It equals 4 R* for
+// equal spheres; a wall contact takes 4 R* = 4 a_i, which keeps the ratio between the
+// stiffness and modulus forms of a wall contact the same as for a pair of equal spheres.
+KOKKOS_INLINE_FUNCTION double pair_diameter(const PairState& s) {
+  return s.wall ? 4.0 * s.ai : s.ai + s.aj;
+}
 
 KOKKOS_INLINE_FUNCTION double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];

@@ -34,7 +34,7 @@ struct CoulombTangential {
 
   KOKKOS_INLINE_FUNCTION static double scale(const Params& q, const PairState& s) {
     if (q.law == Constant) return 1.0;
-    const double L = q.law == MindlinPairDiameter ? s.ai + s.aj : s.ai * s.aj / (s.ai + s.aj);
+    const double L = q.law == MindlinPairDiameter ? pair_diameter(s) : reduced_radius(s);
     return Kokkos::Experimental::sqrt(L * s.delta);
   }
   // Advances the spring h[0..2] by one step of length dt and returns the force on i.
@@ -93,7 +93,7 @@ struct RollingTorsion {
   KOKKOS_INLINE_FUNCTION void torque(const PairState& s, double fn, double dt, double* h,
                                      double q_i[3]) const {
     const Params& q = table(s.si, s.sj);
-    const double ar = s.ai * s.aj / (s.ai + s.aj);
+    const double ar = reduced_radius(s);
     double vr[3], vo[3], fr[3], fo[3], t[3];
     cross3(s.wrel, s.n, vr);
     const double wn = dot3(s.wrel, s.n);

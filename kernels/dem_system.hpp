@@ -1,5 +1,5 @@
-// A DEM system: particles in a periodic (optionally deforming) box, a neighbour list and
-// a contact model, advanced by velocity Verlet. Owns the physical-safety guards: the time
+// A DEM system: particles in a periodic (optionally deforming) box, or a box closed by
+// walls on some axes, a neighbour list and a contact model, advanced by velocity Verlet. Owns the physical-safety guards: the time
 // step against the shortest collision, NaN, runaway overlap and runaway energy.
 #pragma once
 #include <Kokkos_Core.hpp>
@@ -11,6 +11,7 @@
 #include "core/box.hpp"
 #include "core/error.hpp"
 #include "core/particles.hpp"
+#include "core/walls.hpp"
 #include "kernels/contact_forces.hpp"
 #include "kernels/contact_history.hpp"
 #include "kernels/contact_model.hpp"
@@ -18,6 +19,7 @@
 #include "kernels/measure.hpp"
 #include "kernels/neighbor_list.hpp"
 #include "kernels/strain.hpp"
+#include "kernels/wall_forces.hpp"
 
 namespace granular {
 
@@ -31,6 +33,7 @@ struct DemParams {
   bool sort = true;          // reorder particles in cell order at every rebuild (locality)
   long rebuild_every = 0;    // > 0: rebuild the neighbour list every this many steps, whatever
                              // the skin criterion says (tests, benchmarks of flowing systems)
+  double gravity[3] = {0, 0, 0};  // body force per unit mass
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -57,6 +60,7 @@ class DemSystem {
       a_min_ = std::min(a_min_, radius(i));
       a_max_ = std::max(a_max_, radius(i));
     }
+    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
     rebuild();
@@ -72,6 +76,7 @@ class DemSystem {
       const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) rebuild();
+      walls_.update(time_ + dt);
       forces(dt);
       kick<kRot>(p_, dt);
       time_ += dt;
@@ -86,7 +91,37 @@ class DemSystem {
   void set_model(const Model& model) { model_ = model; }
 
   void set_strain_rate(double ex, double ey, double ez) {
+    if (walls_.size() > 0 && (ex != 0.0 || ey != 0.0 || ez != 0.0))
+      throw InputError("a box with walls is not strained: move the walls instead");
     rate_[0] = ex, rate_[1] = ey, rate_[2] = ez;
+  }
+
+  // Planar walls (closing the non-periodic axes of the box). Contact histories start
+  // fresh; forces are recomputed at the current time.
+  void set_walls(std::vector<WallSpec> specs) {
+    if (rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0)
+      throw InputError("a box with walls is not strained: move the walls instead");
+    for (auto& w : specs) w.validate("wall " + w.name);
+    walls_ = WallSet<ExecSpace>(std::move(specs));
+    walls_.update(time_);
+    const int nw = walls_.size();
+    constexpr int H = Model::history;
+    wall_history_ = wall_view("dem::wall_history", nw > 0 && H > 0 ? p_.n : 0, nw * H);
+    wall_record_ = wall_view("dem::wall_record", nw > 0 ? p_.n : 0, nw * kWallColumns);
+    external_ = nw > 0;
+    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
+    check_time_step();
+    forces(0.0);
+  }
+  const WallSet<ExecSpace>& walls() const { return walls_; }
+  // Force, torque, contacts and energy of each wall, as of the last force evaluation.
+  std::vector<WallLoad> wall_loads() const {
+    return granular::wall_loads<ExecSpace>(wall_record_, p_.n, walls_.size());
+  }
+  // Per-(particle, wall) history rows (particle order as in memory), for saved states.
+  const Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>&
+  wall_history() const {
+    return wall_history_;
   }
   // Forces depend on velocities (damping): recompute after external edits of the state.
   void refresh_forces() { forces(0.0); }
@@ -100,6 +135,8 @@ class DemSystem {
       order = typename Particles<ExecSpace>::int_view("dem::sort_order", p_.n);
       Kokkos::deep_copy(order, Kokkos::subview(nl_.cell_order(), std::make_pair(0, p_.n)));
       p_.permute(order);
+      permute_rows<ExecSpace>(wall_history_, order, p_.n);
+      permute_rows<ExecSpace>(wall_record_, order, p_.n);
     }
     nl_.build(p_, box_);
     history_.remap(p_, nl_, order);
@@ -108,9 +145,17 @@ class DemSystem {
       pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
   }
 
+  // Pair measurements; wall contacts add their elastic energy and their overlaps (stress,
+  // fabric and coordination stay those of the particle contacts).
   Measurements measure() const {
-    return granular::measure(p_, nl_, history_view(), box_, model_, params_.rattler_threshold,
-                             particle_volume_);
+    Measurements m = granular::measure(p_, nl_, history_view(), box_, model_,
+                                       params_.rattler_threshold, particle_volume_);
+    if (walls_.size() > 0)
+      for (const WallLoad& w : wall_loads()) {
+        m.epot += w.energy;
+        m.max_overlap = std::max(m.max_overlap, w.max_overlap);
+      }
+    return m;
   }
   // Per-contact history rows, aligned with the neighbour list (empty for models without).
   typename ContactHistory<ExecSpace, Model::history>::values_view history_view() const {
@@ -156,7 +201,10 @@ class DemSystem {
   const DemParams& params() const { return params_; }
   double time() const { return time_; }
   long steps() const { return steps_; }
-  void set_clock(double t, long steps) { time_ = t, steps_ = steps; }
+  void set_clock(double t, long steps) {
+    time_ = t, steps_ = steps;
+    walls_.update(time_);
+  }
   double particle_volume() const { return particle_volume_; }
 
  private:
@@ -169,6 +217,9 @@ class DemSystem {
   }
   void forces(double dt) {
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt);
+    if (external_)
+      add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
+                          params_.gravity, dt);
   }
 
   void step_profiled(long n) {
@@ -192,6 +243,7 @@ class DemSystem {
         ++profile_->rebuilds;
       }
       lap(profile_->neighbor);
+      walls_.update(time_ + dt);
       forces(dt);
       lap(profile_->force);
       kick<kRot>(p_, dt);
@@ -203,11 +255,12 @@ class DemSystem {
 
   // The stiffest, lightest pair sets the shortest collision; dt must resolve it.
   void check_time_step() const {
-    if (p_.n < 2) return;
+    if (p_.n < 1 || (p_.n < 2 && walls_.size() == 0)) return;
     auto mass = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.mass);
     std::vector<double> m(mass.data(), mass.data() + p_.n);
-    std::partial_sort(m.begin(), m.begin() + 2, m.end());
-    const double m_red = m[0] * m[1] / (m[0] + m[1]);
+    std::partial_sort(m.begin(), m.begin() + std::min(2, p_.n), m.end());
+    // A wall is a partner of infinite mass: its contacts see the lightest mass itself.
+    const double m_red = walls_.size() > 0 ? m[0] : m[0] * m[1] / (m[0] + m[1]);
     const double tc = model_.shortest_duration(m_red, params_.max_overlap * a_min_, 2 * a_max_);
     if (params_.dt > params_.dt_guard * tc) {
       std::ostringstream msg;
@@ -235,6 +288,10 @@ class DemSystem {
   typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history",
                                                                                  1, 1};
   StepProfile* profile_ = nullptr;
+  using wall_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
+  WallSet<ExecSpace> walls_;
+  wall_view wall_history_, wall_record_;
+  bool external_ = false;  // walls or gravity: one more pass over the particles per step
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both
 };

@@ -66,6 +66,7 @@ void wrap_positions(const Particles<ExecSpace>& p, const PeriodicBox& box) {
   Kokkos::parallel_for(
       "dem::wrap_positions", Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
         for (int d = 0; d < 3; ++d) {
+          if (!b.periodic[d]) continue;
           const double l = b.len[d];
           const double xd = x(i, d) - l * Kokkos::Experimental::floor((x(i, d) - b.lo[d]) / l);
           x(i, d) = xd < b.lo[d] + l ? xd : b.lo[d];  // round-off can land exactly on the face

@@ -39,9 +39,14 @@ struct CellVisitor {
     const int cx = c % ncx, cy = (c / ncx) % ncy, cz = c / (ncx * ncy);
     // Offsets {-1,0,1} per axis, or fewer when the axis has < 3 cells, so that no cell is
     // visited twice.
-    const int lox = ncx >= 3 ? -1 : 0, hix = ncx >= 2 ? 1 : 0;
-    const int loy = ncy >= 3 ? -1 : 0, hiy = ncy >= 2 ? 1 : 0;
-    const int loz = ncz >= 3 ? -1 : 0, hiz = ncz >= 2 ? 1 : 0;
+    // A walled (non-periodic) axis does not wrap: its neighbour cells stop at the edges.
+    const bool px = box.periodic[0], py = box.periodic[1], pz = box.periodic[2];
+    const int lox = px ? (ncx >= 3 ? -1 : 0) : (cx > 0 ? -1 : 0);
+    const int hix = px ? (ncx >= 2 ? 1 : 0) : (cx < ncx - 1 ? 1 : 0);
+    const int loy = py ? (ncy >= 3 ? -1 : 0) : (cy > 0 ? -1 : 0);
+    const int hiy = py ? (ncy >= 2 ? 1 : 0) : (cy < ncy - 1 ? 1 : 0);
+    const int loz = pz ? (ncz >= 3 ? -1 : 0) : (cz > 0 ? -1 : 0);
+    const int hiz = pz ? (ncz >= 2 ? 1 : 0) : (cz < ncz - 1 ? 1 : 0);
     const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2), ai = radius(i);
     for (int dz = loz; dz <= hiz; ++dz) {
       const int zz = (cz + dz + ncz) % ncz;
@@ -137,6 +142,11 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
   int nc[3];
   double cell_len[3];
   for (int d = 0; d < 3; ++d) {
+    if (!box.periodic[d]) {  // no images: any length works, cells no smaller than rc
+      nc[d] = std::max(1, static_cast<int>(std::floor(box.len[d] / rc)));
+      cell_len[d] = box.len[d] / nc[d];
+      continue;
+    }
     if (box.len[d] < 2.0 * rc)
       throw PhysicsError("box edge " + std::to_string(box.len[d]) +
                          " is shorter than twice the neighbour cutoff " + std::to_string(rc) +

@@ -1,0 +1,161 @@
+// Sphere-wall contacts and body forces. A wall is evaluated by the same contact model
+// structs as a pair, as a partner of infinite radius and mass (PairState::wall): R* = a_i,
+// m* = m_i, the wall's material in its species slot. Every particle tests every wall
+// (walls are few), so wall contacts need no list; their history is a dense
+// (particle, wall) table that moves with the particles when they are reordered.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <vector>
+
+#include "core/particles.hpp"
+#include "core/walls.hpp"
+#include "kernels/contact_forces.hpp"
+#include "kernels/contact_model.hpp"
+#include "kernels/deterministic_sum.hpp"
+
+namespace granular {
+
+// Geometry and relative motion of particle bi against wall w; false if they do not touch.
+// The normal points from the wall into the particle (the direction of the force on it).
+KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool rotations,
+                                          PairState& s) {
+  const double gap = (bi.x[0] - w.p[0]) * w.n[0] + (bi.x[1] - w.p[1]) * w.n[1] +
+                     (bi.x[2] - w.p[2]) * w.n[2];  // signed distance, negative inside
+  const double delta = bi.a + gap;
+  if (!(delta > 0.0)) return false;
+  s.n[0] = -w.n[0], s.n[1] = -w.n[1], s.n[2] = -w.n[2];
+  s.delta = delta;
+  s.ai = bi.a, s.aj = 0.0;
+  s.mstar = bi.m;
+  s.si = bi.s, s.sj = w.material;
+  s.wall = true;
+  const double dv[3] = {bi.v[0] - w.v[0], bi.v[1] - w.v[1], bi.v[2] - w.v[2]};
+  const double vn = dot3(dv, s.n);
+  s.delta_dot = -vn;
+  // Contact point mid-overlap, as for pairs: lever arm a_i - delta/2 from the centre.
+  const double li = bi.a - 0.5 * delta;
+  double c[3] = {0, 0, 0};
+  if (rotations) {
+    const double aw[3] = {li * bi.w[0], li * bi.w[1], li * bi.w[2]};
+    cross3(aw, s.n, c);
+  }
+  for (int d = 0; d < 3; ++d) {
+    s.vt[d] = dv[d] - vn * s.n[d] - c[d];
+    s.wrel[d] = rotations ? bi.w[d] : 0.0;
+  }
+  return true;
+}
+
+// Columns of the per-(particle, wall) record: force on the wall (3), torque on the wall
+// about its reference point (3), contact flag, elastic energy, overlap / a_i.
+constexpr int kWallColumns = 9;
+
+// Adds wall contact forces and gravity to f and torque (after the pair gather), advances
+// the wall histories, and records each wall's share per particle for the wall sums.
+// history: (n, walls * H); record: (n, walls * kWallColumns).
+template <class ExecSpace, class Model, class HistoryView, class RecordView>
+void add_external_forces(const Particles<ExecSpace>& p,
+                         const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
+                         const HistoryView& history, const RecordView& record, const Model& model,
+                         const double gravity[3], double dt) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto f = p.f, torque = p.torque;
+  const Model m = model;
+  const double g[3] = {gravity[0], gravity[1], gravity[2]};
+  Kokkos::parallel_for(
+      "dem::add_external_forces", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
+        constexpr int H = Model::history;
+        constexpr bool rot = Model::rotations;
+        constexpr int WC = kWallColumns;
+        (void)history.extent(0);
+        (void)torque.extent(0);
+        const Body bi = load_body(pv, i, rot);
+        double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
+        double qi[3] = {0, 0, 0};
+        for (int w = 0; w < nwalls; ++w) {
+          const Wall wall = walls(w);
+          PairState s;
+          if (!wall_geometry(bi, wall, rot, s)) {
+            for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
+            if constexpr (H > 0)
+              for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
+            continue;
+          }
+          double h[H > 0 ? H : 1];
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
+          PairForce out;
+          m.evaluate(s, dt, h, out);
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) history(i, w * H + c) = h[c];
+          for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
+          // Reaction on the wall: force -f and, about the wall point p, the torque that
+          // balances the particle's angular momentum change: -(x_i - p) x f - q_i.
+          const double r[3] = {bi.x[0] - wall.p[0], bi.x[1] - wall.p[1], bi.x[2] - wall.p[2]};
+          double rxf[3];
+          cross3(r, out.f, rxf);
+          for (int d = 0; d < 3; ++d) {
+            record(i, w * WC + d) = -out.f[d];
+            record(i, w * WC + 3 + d) = -rxf[d] - (rot ? out.q[d] : 0.0);
+          }
+          record(i, w * WC + 6) = 1.0;
+          record(i, w * WC + 7) = m.energy(s, h);
+          record(i, w * WC + 8) = s.delta / s.ai;
+        }
+        for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) torque(i, d) += qi[d];
+      });
+}
+
+// What the walls feel, summed over particles in a fixed order (thread-count independent).
+struct WallLoad {
+  double force[3] = {};   // total force on the wall
+  double torque[3] = {};  // about the wall's reference point
+  double contacts = 0;
+  double energy = 0;       // elastic energy stored in its contacts
+  double max_overlap = 0;  // largest delta / a_i
+};
+
+template <class ExecSpace, class RecordView>
+std::vector<WallLoad> wall_loads(const RecordView& record, int n, int nwalls) {
+  std::vector<WallLoad> out(nwalls);
+  for (int w = 0; w < nwalls; ++w) {
+    auto cols = Kokkos::subview(record, Kokkos::ALL,
+                                std::make_pair(w * kWallColumns, (w + 1) * kWallColumns));
+    const auto sums = deterministic_column_sums<kWallColumns, ExecSpace>(cols, n);
+    for (int d = 0; d < 3; ++d) out[w].force[d] = sums[d], out[w].torque[d] = sums[3 + d];
+    out[w].contacts = sums[6];
+    out[w].energy = sums[7];
+    double mo = 0.0;
+    Kokkos::parallel_reduce(
+        "dem::wall_loads::max_overlap", Kokkos::RangePolicy<ExecSpace>(0, n),
+        KOKKOS_LAMBDA(const int i, double& m) {
+          const double o = cols(i, 8);
+          m = o > m ? o : m;
+        },
+        Kokkos::Max<double>(mo));
+    out[w].max_overlap = mo;
+  }
+  return out;
+}
+
+// Rows of a (n, c) view reordered with the particles: new row i is old row order(i).
+template <class ExecSpace, class View2D, class Order>
+void permute_rows(View2D& a, const Order& order, int n) {
+  if (a.extent(0) == 0) return;
+  View2D b(a.label(), a.extent(0), a.extent(1));
+  auto src = a;
+  const int nc = static_cast<int>(a.extent(1));
+  Kokkos::parallel_for(
+      "dem::permute_rows", Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i) {
+        const int o = order(i);
+        for (int c = 0; c < nc; ++c) b(i, c) = src(o, c);
+      });
+  a = b;
+}
+
+}  // namespace granular
