@@ -64,6 +64,21 @@ void SceneFile::note(const std::string& key, const std::string& value) const { u
 
 bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
 
+std::vector<std::string> SceneFile::tables(const std::string& key) const {
+  std::vector<std::string> out;
+  const toml::node* n = as_node(find(key));
+  if (!n) return out;
+  const toml::table* t = n->as_table();
+  if (!t) fail(key, "must be a table of named tables ([" + key + ".<name>])");
+  for (const auto& [k, node] : *t) {
+    if (!node.as_table())
+      fail(key + "." + std::string(k.str()), "must be a table ([" + key + "." +
+                                                   std::string(k.str()) + "])");
+    out.emplace_back(k.str());
+  }
+  return out;
+}
+
 double SceneFile::real(const std::string& key) const {
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a number is required)");

@@ -33,6 +33,9 @@ class SceneFile {
   bool flag(const std::string& key, bool def) const;
   std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
   bool has(const std::string& key) const;
+  // Names of the sub-tables of table `key`, sorted by name (e.g. the walls of [walls.floor],
+  // [walls.top]); empty when the table is absent. A value that is not a table is an error.
+  std::vector<std::string> tables(const std::string& key) const;
 
   // Throws naming the first key present in the file that no reader asked for.
   void reject_unknown_keys() const;
