@@ -5,6 +5,7 @@
 #include <Kokkos_Core.hpp>
 
 #include "kernels/contact_hertz.hpp"
+#include "kernels/contact_hertz_restitution.hpp"
 #include "kernels/contact_hysteretic.hpp"
 #include "kernels/contact_linear.hpp"
 #include "kernels/contact_state.hpp"

@@ -4,6 +4,9 @@
 // no sliding). The spring stiffness is constant (linear), or grows with the overlap as in
 // Mindlin's theory: k_t = kt sqrt(L delta), gamma_t = gt sqrt(L delta), with L = dbar = a_i + a_j
 // ("stiffness" form, kt = 2 G_p / (2 - nu)) or L = R ("modulus" form, kt = 8 G*).
+// MindlinRestitution: the modulus-form spring k_t = kt sqrt(R delta) (kt = 8 G*) with the
+// damping of the restitution mapping, gamma_t = gt sqrt(m* k_t), gt = 2 sqrt(5/6) beta(e)
+// (mindlin_gt_common in core/restitution.hpp; pairs with HertzRestitutionNormal).
 #pragma once
 #include <Kokkos_Core.hpp>
 
@@ -19,9 +22,15 @@ struct NoTangential {
 struct CoulombTangential {
   static constexpr int history = 3;  // spring vector xi
   static constexpr bool active = true;
-  enum Law : int { Constant = 0, MindlinPairDiameter = 1, MindlinReducedRadius = 2 };
+  enum Law : int {
+    Constant = 0,
+    MindlinPairDiameter = 1,
+    MindlinReducedRadius = 2,
+    MindlinRestitution = 3
+  };
   struct Params {
-    double kt = 0, gt = 0;      // stiffness and viscosity (coefficients for Mindlin laws)
+    double kt = 0, gt = 0;      // stiffness and viscosity (coefficients for Mindlin laws;
+                                // MindlinRestitution: gt is the dimensionless gamma_t/sqrt(m* k_t))
     double mu_s = 0, mu_d = 0;  // static and dynamic friction (may be infinite)
     int law = Constant;
   };
@@ -32,6 +41,7 @@ struct CoulombTangential {
     return {PairTable<Params>::uniform({kt, gt, mu_s, mu_d, law})};
   }
 
+  // sqrt(L delta) of the Mindlin laws (MindlinRestitution: L = R), 1 for the constant law.
   KOKKOS_INLINE_FUNCTION static double scale(const Params& q, const PairState& s) {
     if (q.law == Constant) return 1.0;
     const double L = q.law == MindlinPairDiameter ? pair_diameter(s) : reduced_radius(s);
@@ -43,11 +53,16 @@ struct CoulombTangential {
                                     double f[3]) const {
     const Params& q = table(s.si, s.sj);
     const double c = scale(q, s);
+    const double k = q.kt * c;
+    // The restitution law scales its dashpot with sqrt(m* k_t) instead of sqrt(L delta).
+    const double g =
+        q.law == MindlinRestitution ? q.gt * Kokkos::Experimental::sqrt(s.mstar * k) : q.gt * c;
     rotate_into_plane(h, s.n);
     for (int d = 0; d < 3; ++d) h[d] += s.vt[d] * dt;
-    return coulomb_spring(h, s.vt, q.kt * c, q.gt * c, q.mu_s, q.mu_d, fn, f);
+    return coulomb_spring(h, s.vt, k, g, q.mu_s, q.mu_d, fn, f);
   }
-  // Elastic (spring) part only, from the stored spring, without advancing it.
+  // Elastic (spring) part only, from the stored spring, without advancing it (the same
+  // spring k_t for every law: damping never enters).
   KOKKOS_INLINE_FUNCTION void elastic_force(const PairState& s, double fn, const double* h,
                                             double f[3]) const {
     const Params& q = table(s.si, s.sj);
