@@ -1,6 +1,8 @@
 // Atomic output files, JSON, HDF5 (see output.hpp).
 #include "core/output.hpp"
 
+#include <cctype>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -83,7 +85,28 @@ void Json::dump_to(std::string& out, int indent, int depth) const {
   } else if (auto s = std::get_if<std::string>(&v_)) {
     quote(out, *s);
   } else if (auto r = std::get_if<Raw>(&v_)) {
-    out += r->text;
+    // Scene values such as `mu = inf` are not JSON numbers: quote inf and nan tokens (with
+    // their sign) outside strings so summary.json stays valid JSON.
+    const std::string& t = r->text;
+    auto special = [&t](size_t i) -> size_t {  // length of an inf/nan token at i, or 0
+      const size_t sign = (t[i] == '-' || t[i] == '+') ? 1 : 0;
+      for (const char* word : {"inf", "nan"})
+        if (t.compare(i + sign, 3, word) == 0 &&
+            (i + sign + 3 == t.size() || !std::isalnum(static_cast<unsigned char>(t[i + sign + 3]))))
+          return sign + 3;
+      return 0;
+    };
+    bool in_string = false;
+    for (size_t i = 0; i < t.size(); ++i) {
+      if (t[i] == '"' && (i == 0 || t[i - 1] != '\\')) in_string = !in_string;
+      const size_t len = in_string ? 0 : special(i);
+      if (len > 0) {
+        out += '"' + t.substr(i, len) + '"';
+        i += len - 1;
+      } else {
+        out += t[i];
+      }
+    }
   } else if (auto o = std::get_if<Object>(&v_)) {
     out += "{";
     out += nl;
