@@ -1,5 +1,6 @@
 // Contact and background-damping forces: one generic loop over the neighbour list,
-// templated on the contact model (the model struct holds the physics of one pair).
+// templated on the contact model (the model struct holds the physics of one pair) and on a
+// hook through which multi-contact laws act (kernels/multicontact.hpp; none by default).
 #pragma once
 #include <Kokkos_Core.hpp>
 
@@ -103,6 +104,19 @@ struct ParticleViews {
       : x(p.x), v(p.v), w(p.w), radius(p.radius), mass(p.mass), species(p.species), id(p.id) {}
 };
 
+// Extension point of the pair pass for laws that need more than the pair (multi-contact,
+// kernels/multicontact.hpp): a hook may replace the model's evaluation of a touching contact
+// and record per-contact data. The classical pass uses NoPairHook, and `if constexpr` then
+// compiles exactly the classical kernel (same arithmetic, same results bit for bit).
+struct NoPairHook {
+  static constexpr bool active = false;
+  static constexpr const char* label = "dem::compute_forces::pairs";
+  template <class Model>
+  KOKKOS_INLINE_FUNCTION void evaluate(const Model&, int, const PairState&, double, double*,
+                                       PairForce&) const {}
+  KOKKOS_INLINE_FUNCTION void apart(int) const {}
+};
+
 // Two passes. Pairs: the owner of each contact (the particle with the lower identity, which
 // survives reordering) evaluates it once,
 // advances its history and stores the force on i and the torques on i and j. Gather: every
@@ -110,28 +124,28 @@ struct ParticleViews {
 // through the mirror entry, with the sign of the force flipped). No atomics, half the pair
 // work of a full list, and a summation order that does not depend on threads or backend.
 // `pair` must have num_entries rows and 3 (9 with rotations) columns.
-template <class ExecSpace, class Model, class HistoryView, class PairView>
-void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                    const HistoryView& history, const PairView& pair, const PeriodicBox& box,
-                    const Model& model, const Damping& damping, const double strain_rate[3],
-                    double dt) {
+// The passes are separate functions so that multi-contact laws can act between them.
+template <class ExecSpace, class Model, class HistoryView, class PairView, class Hook = NoPairHook>
+void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                         const HistoryView& history, const PairView& pair, const PeriodicBox& box,
+                         const Model& model, const double strain_rate[3], double dt,
+                         const Hook& pair_hook = Hook()) {
   const ParticleViews<ExecSpace> pv(p);
-  auto f = p.f, torque = p.torque;
-  auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
+  auto offsets = nl.offsets(), neighbors = nl.neighbors();
   auto owned_end = nl.owned_end();
   const PeriodicBox b = box;
   const Model m = model;
-  const double gb = damping.translational, gr = damping.rotational;
+  const Hook hook = pair_hook;
   const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
   // Compile-time switches are re-declared inside each kernel: nvcc would otherwise
   // capture them, which extended lambdas cannot do in an if-constexpr condition.
   Kokkos::parallel_for(
-      "dem::compute_forces::pairs", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
+      Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
         constexpr int H = Model::history;
         constexpr bool rot = Model::rotations;
         constexpr int NB = rot ? 9 : 3;
         (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
+        (void)hook;
         const double r3[3] = {rate[0], rate[1], rate[2]};
         const Body bi = load_body(pv, i, rot);
         for (int k = offsets(i); k < owned_end(i); ++k) {  // the contacts i owns
@@ -147,6 +161,7 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
               if (stale)
                 for (int c = 0; c < H; ++c) history(k, c) = 0.0;
             }
+            if constexpr (Hook::active) hook.apart(k);
             continue;
           }
           PairState s;
@@ -155,7 +170,10 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) h[c] = history(k, c);
           PairForce out;
-          m.evaluate(s, dt, h, out);
+          if constexpr (Hook::active)
+            hook.evaluate(m, k, s, dt, h, out);
+          else
+            m.evaluate(s, dt, h, out);
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) history(k, c) = h[c];
           for (int d = 0; d < 3; ++d) pair(k, d) = out.f[d];
@@ -163,6 +181,16 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
             for (int d = 0; d < 3; ++d) pair(k, 3 + d) = out.q[d], pair(k, 6 + d) = out.qj[d];
         }
       });
+}
+
+template <class ExecSpace, class Model, class PairView>
+void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                        const PairView& pair, const Damping& damping) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto f = p.f, torque = p.torque;
+  auto offsets = nl.offsets(), mirror = nl.mirror();
+  auto owned_end = nl.owned_end();
+  const double gb = damping.translational, gr = damping.rotational;
   Kokkos::parallel_for(
       "dem::compute_forces::gather", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
@@ -189,6 +217,15 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
         if constexpr (rot)
           for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
       });
+}
+
+template <class ExecSpace, class Model, class HistoryView, class PairView>
+void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                    const HistoryView& history, const PairView& pair, const PeriodicBox& box,
+                    const Model& model, const Damping& damping, const double strain_rate[3],
+                    double dt) {
+  compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt);
+  gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
 }
 
 }  // namespace granular

@@ -1,11 +1,13 @@
 // A DEM system: particles in a periodic (optionally deforming) box, or a box closed by
-// walls on some axes, a neighbour list and a contact model, advanced by velocity Verlet. Owns the physical-safety guards: the time
+// walls on some axes, a neighbour list and a contact model (optionally with a multi-contact
+// law on top), advanced by velocity Verlet. Owns the physical-safety guards: the time
 // step against the shortest collision, NaN, runaway overlap and runaway energy.
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "core/box.hpp"
@@ -17,6 +19,7 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/integrator.hpp"
 #include "kernels/measure.hpp"
+#include "kernels/multicontact.hpp"
 #include "kernels/neighbor_list.hpp"
 #include "kernels/strain.hpp"
 #include "kernels/wall_forces.hpp"
@@ -28,11 +31,11 @@ struct DemParams {
   double skin = 0.0;
   Damping damping;
   int rattler_threshold = 3;
-  double max_overlap = 0.3;  // delta / min(a_i, a_j) above which the run is stopped
-  double dt_guard = 0.1;     // dt must not exceed this fraction of the shortest collision
-  bool sort = true;          // reorder particles in cell order at every rebuild (locality)
-  long rebuild_every = 0;    // > 0: rebuild the neighbour list every this many steps, whatever
-                             // the skin criterion says (tests, benchmarks of flowing systems)
+  double max_overlap = 0.3;       // delta / min(a_i, a_j) above which the run is stopped
+  double dt_guard = 0.1;          // dt must not exceed this fraction of the shortest collision
+  bool sort = true;               // reorder particles in cell order at every rebuild (locality)
+  long rebuild_every = 0;         // > 0: rebuild the neighbour list every this many steps, whatever
+                                  // the skin criterion says (tests, benchmarks of flowing systems)
   double gravity[3] = {0, 0, 0};  // body force per unit mass
 };
 
@@ -108,11 +111,31 @@ class DemSystem {
     constexpr int H = Model::history;
     wall_history_ = wall_view("dem::wall_history", nw > 0 && H > 0 ? p_.n : 0, nw * H);
     wall_record_ = wall_view("dem::wall_record", nw > 0 ? p_.n : 0, nw * kWallColumns);
+    mc_.resize_walls(p_.n, nw);
     external_ = nw > 0;
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
-    forces(0.0);
+    initial_forces();
   }
+
+  // Multi-contact law on top of the contact model (mode None: the classical kernels, bit
+  // for bit). Forces are recomputed at the current state; MC-strain, which uses each
+  // contact's normal force of the previous evaluation, is evaluated twice, so that a state
+  // already under load starts with its own (classical) forces as the previous ones instead
+  // of none.
+  void set_multicontact(const MultiContact& mc) {
+    bool used[kMaxSpecies] = {};
+    auto species = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.species);
+    for (int i = 0; i < p_.n; ++i) {
+      if (species(i) < 0 || species(i) >= kMaxSpecies)
+        throw InputError("particle species " + std::to_string(species(i)) + " out of range");
+      used[species(i)] = true;
+    }
+    mc.validate(used);
+    mc_.configure(mc, p_, nl_, walls_.size(), pair_.extent(0));
+    initial_forces();
+  }
+  const MultiContact& multicontact() const { return mc_.options(); }
   const WallSet<ExecSpace>& walls() const { return walls_; }
   // Force, torque, contacts and energy of each wall, as of the last force evaluation.
   std::vector<WallLoad> wall_loads() const {
@@ -137,16 +160,22 @@ class DemSystem {
       p_.permute(order);
       permute_rows<ExecSpace>(wall_history_, order, p_.n);
       permute_rows<ExecSpace>(wall_record_, order, p_.n);
+      mc_.reorder(order, p_.n);
     }
     nl_.build(p_, box_);
     history_.remap(p_, nl_, order);
     constexpr int nb = Model::rotations ? 9 : 3;
     if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
       pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+    mc_.after_build(p_, nl_, order, pair_.extent(0));
   }
 
   // Pair measurements; wall contacts add their elastic energy and their overlaps (stress,
   // fabric and coordination stay those of the particle contacts).
+  // With a multi-contact law, epot stays the binary contact law's energy at the geometric
+  // overlaps (the corrected forces, explicit and many-body, derive from no potential: the
+  // figure is the classical reference, not a conserved quantity), and max_overlap stays
+  // geometric, which is what the runaway-overlap guard and the lever arms depend on.
   Measurements measure() const {
     Measurements m = granular::measure(p_, nl_, history_view(), box_, model_,
                                        params_.rattler_threshold, particle_volume_);
@@ -216,10 +245,20 @@ class DemSystem {
     return nl_.needs_rebuild(max_sq, box_);
   }
   void forces(double dt) {
+    if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
+      mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
+                  wall_history_, wall_record_, params_.gravity, external_);
+      return;
+    }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);
+  }
+  // Forces of a state whose contacts have no previous evaluation under the current law.
+  void initial_forces() {
+    forces(0.0);
+    if (mc_.options().mode == MultiContact::Strain) forces(0.0);
   }
 
   void step_profiled(long n) {
@@ -294,6 +333,7 @@ class DemSystem {
   bool external_ = false;  // walls or gravity: one more pass over the particles per step
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both
+  MultiContactForces<ExecSpace> mc_;
 };
 
 }  // namespace granular

@@ -2,7 +2,8 @@
 // structs as a pair, as a partner of infinite radius and mass (PairState::wall): R* = a_i,
 // m* = m_i, the wall's material in its species slot. Every particle tests every wall
 // (walls are few), so wall contacts need no list; their history is a dense
-// (particle, wall) table that moves with the particles when they are reordered.
+// (particle, wall) table that moves with the particles when they are reordered. Multi-contact
+// laws act through a hook, as in the pair pass.
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <vector>
@@ -50,26 +51,40 @@ KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool ro
 // about its reference point (3), contact flag, elastic energy, overlap / a_i.
 constexpr int kWallColumns = 9;
 
+// Extension point for laws that need more than the contact (multi-contact,
+// kernels/multicontact.hpp): a hook may replace the evaluation of a touching sphere-wall
+// contact and record per-contact data. NoWallHook compiles the classical kernel unchanged.
+struct NoWallHook {
+  static constexpr bool active = false;
+  static constexpr const char* label = "dem::add_external_forces";
+  template <class Model>
+  KOKKOS_INLINE_FUNCTION void evaluate(const Model&, int, int, const PairState&, double, double*,
+                                       PairForce&) const {}
+  KOKKOS_INLINE_FUNCTION void apart(int, int) const {}
+};
+
 // Adds wall contact forces and gravity to f and torque (after the pair gather), advances
 // the wall histories, and records each wall's share per particle for the wall sums.
 // history: (n, walls * H); record: (n, walls * kWallColumns).
-template <class ExecSpace, class Model, class HistoryView, class RecordView>
+template <class ExecSpace, class Model, class HistoryView, class RecordView,
+          class Hook = NoWallHook>
 void add_external_forces(const Particles<ExecSpace>& p,
                          const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
                          const HistoryView& history, const RecordView& record, const Model& model,
-                         const double gravity[3], double dt) {
+                         const double gravity[3], double dt, const Hook& wall_hook = Hook()) {
   const ParticleViews<ExecSpace> pv(p);
   auto f = p.f, torque = p.torque;
   const Model m = model;
+  const Hook hook = wall_hook;
   const double g[3] = {gravity[0], gravity[1], gravity[2]};
   Kokkos::parallel_for(
-      "dem::add_external_forces", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
+      Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
         constexpr int H = Model::history;
         constexpr bool rot = Model::rotations;
         constexpr int WC = kWallColumns;
         (void)history.extent(0);
         (void)torque.extent(0);
+        (void)hook;
         const Body bi = load_body(pv, i, rot);
         double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
         double qi[3] = {0, 0, 0};
@@ -80,13 +95,17 @@ void add_external_forces(const Particles<ExecSpace>& p,
             for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
             if constexpr (H > 0)
               for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
+            if constexpr (Hook::active) hook.apart(i, w);
             continue;
           }
           double h[H > 0 ? H : 1];
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
           PairForce out;
-          m.evaluate(s, dt, h, out);
+          if constexpr (Hook::active)
+            hook.evaluate(m, i, w, s, dt, h, out);
+          else
+            m.evaluate(s, dt, h, out);
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) history(i, w * H + c) = h[c];
           for (int d = 0; d < 3; ++d) fi[d] += out.f[d];

@@ -1,0 +1,88 @@
+// The shipped impact scene against its closed forms: restitution equal to the input at
+// every speed for both mappings, gross sliding with a tangential impulse of mu times the
+// normal one, rebound spin and angle as in the closed form; and scene-file errors that
+// name the key and the file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/output.hpp"
+#include "granular_config.hpp"
+#include "scenarios/scene_registry.hpp"
+
+using namespace granular;
+
+namespace {
+std::string shipped(const std::string& name) {
+  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+std::string temp_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("granular_test_" + name);
+  std::filesystem::remove_all(dir);
+  return dir.string();
+}
+}  // namespace
+
+TEST(ImpactScene, ShippedGlassOnSteelReboundsAsItsClosedForms) {
+  RunOptions opts;
+  opts.out_dir = temp_dir("impact");
+  opts.progress = false, opts.charts = false;
+  const SceneFile scene =
+      SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/impact_glass_wall.toml");
+  ASSERT_EQ(scene.text("scene"), "impact");  // the CLI reads this key to pick the driver
+  run_impact(scene, opts);
+  const H5Reader r(opts.out_dir + "/results.h5");
+  const double e_in = r.attribute("/", "restitution_input"), mu = r.attribute("/", "friction");
+  ASSERT_EQ(e_in, 0.9);
+  for (const char* mapping :
+       {"/speed_sweep/restitution_exact_mapping", "/speed_sweep/restitution_common_mapping"})
+    for (double e : r.reals(mapping)) EXPECT_NEAR(e, e_in, 1e-4) << mapping;
+  const auto sliding = r.reals("/angles/gross_sliding");
+  const auto ratio = r.reals("/angles/impulse_ratio");
+  const auto spin = r.reals("/angles/spin_out_scaled");
+  const auto spin_cf = r.reals("/angles/closed_form_spin_out_scaled");
+  const auto angle = r.reals("/angles/rebound_angle_deg");
+  const auto angle_cf = r.reals("/angles/closed_form_rebound_angle_deg");
+  int slid = 0;
+  for (size_t k = 0; k < sliding.size(); ++k) {
+    if (sliding[k] == 0.0) {
+      EXPECT_LT(ratio[k], mu + 1e-3);  // sticking at some point: at most the Coulomb limit
+      continue;
+    }
+    ++slid;
+    // |f_n| in the Coulomb limit includes the brief tensile dashpot force at the end.
+    EXPECT_NEAR(ratio[k] / mu, 1.0, 2e-3) << k;
+    EXPECT_NEAR(spin[k] / spin_cf[k], 1.0, 5e-3) << k;
+    EXPECT_NEAR(angle[k], angle_cf[k], 0.05) << k;
+  }
+  EXPECT_GE(slid, 2);
+}
+
+TEST(ImpactScene, UnknownMaterialNamesKeyAndFile) {
+  std::string text = shipped("impact_glass_wall.toml");
+  const std::string good = "target_material = \"steel\"";
+  const auto at = text.find(good);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, good.size(), "target_material = \"brass\"");
+  RunOptions opts;
+  opts.out_dir = temp_dir("impact_bad");
+  opts.progress = false, opts.charts = false;
+  try {
+    const SceneFile scene = SceneFile::parse(text, "bad_impact.toml");
+    (void)scene.text("scene");
+    run_impact(scene, opts);
+    FAIL() << "an unknown material must stop the run";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("impact.target_material"), std::string::npos) << what;
+    EXPECT_NE(what.find("bad_impact.toml"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
+}
