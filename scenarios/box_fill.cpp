@@ -95,10 +95,10 @@ HostParticles fill_region(const FillSpec& s, const PeriodicBox& box) {
   return h;
 }
 
-long settle(const std::function<void(long)>& advance, const std::function<bool()>& done,
-            long every, long max_steps) {
+long settle(const std::function<void(long)>& advance, const std::function<bool()>& done, long every,
+            long max_steps, long min_steps) {
   for (long steps = 0; steps < max_steps; steps += every) {
-    if (done()) return steps;
+    if (steps >= min_steps && done()) return steps;
     advance(every);
   }
   return done() ? max_steps : -1;

@@ -14,8 +14,8 @@ namespace granular {
 
 struct FillSpec {
   int count = 0;
-  double diameter_mean = 1.0;   // diameters uniform in mean (1 -+ spread)
-  double diameter_spread = 0.0; // relative half-width of the uniform distribution
+  double diameter_mean = 1.0;    // diameters uniform in mean (1 -+ spread)
+  double diameter_spread = 0.0;  // relative half-width of the uniform distribution
   double density = 1.0;
   int species = 0;
   std::uint64_t seed = 1;
@@ -25,9 +25,10 @@ struct FillSpec {
 // Throws InputError (naming what to change) when a particle finds no free place.
 HostParticles fill_region(const FillSpec& spec, const PeriodicBox& box);
 
-// Steps `advance(n)` until `done()` holds, checking every `every` steps; returns the
-// steps taken, or -1 if `max_steps` passed first.
-long settle(const std::function<void(long)>& advance, const std::function<bool()>& done,
-            long every, long max_steps);
+// Steps `advance(n)` until `done()` holds, checking every `every` steps once `min_steps`
+// have passed (particles inserted at rest satisfy any kinetic-energy criterion before they
+// have fallen); returns the steps taken, or -1 if `max_steps` passed first.
+long settle(const std::function<void(long)>& advance, const std::function<bool()>& done, long every,
+            long max_steps, long min_steps = 0);
 
 }  // namespace granular

@@ -21,8 +21,8 @@ struct ImpactSetup {
   int species1 = 0;
   double radius2 = 1.0, density2 = 1.0;  // the target sphere
   int species2 = 0;
-  double speed = 1.0;      // impact speed
-  double angle = 0.0;      // incidence angle from the normal (radians): v = speed (sin, 0, -cos)
+  double speed = 1.0;  // impact speed
+  double angle = 0.0;  // incidence angle from the normal (radians): v = speed (sin, 0, -cos)
   double spin[3] = {0, 0, 0};  // initial angular velocity of the moving sphere
   double dt = 1e-3;
   bool record = false;  // keep the time series
@@ -32,13 +32,13 @@ struct ImpactResult {
   double mass = 0, reduced_mass = 0;  // moving sphere's mass; m* of the contact
   double duration = 0;                // measured contact duration (overlap zero crossings)
   double max_overlap = 0, max_normal_force = 0;
-  double vn_in = 0, vn_out = 0;  // relative normal velocity of the centres (approach > 0 in)
-  double vt_in = 0, vt_out = 0;  // relative tangential (x) velocity of the centres
-  double vc_in = 0, vc_out = 0;  // relative tangential (x) velocity of the contact points
-  double spin_in = 0, spin_out = 0;  // angular velocity about y of the moving sphere
-  double restitution_normal = 0;     // -vn_out / vn_in (vn_out measured as separation speed)
-  double restitution_tangential = 0; // -vc_out / vc_in
-  double rebound_angle = 0;          // atan(vt_out / vn_out) of the relative motion (radians)
+  double vn_in = 0, vn_out = 0;       // relative normal velocity of the centres (approach > 0 in)
+  double vt_in = 0, vt_out = 0;       // relative tangential (x) velocity of the centres
+  double vc_in = 0, vc_out = 0;       // relative tangential (x) velocity of the contact points
+  double spin_in = 0, spin_out = 0;   // angular velocity about y of the moving sphere
+  double restitution_normal = 0;      // -vn_out / vn_in (vn_out measured as separation speed)
+  double restitution_tangential = 0;  // -vc_out / vc_in
+  double rebound_angle = 0;           // atan(vt_out / vn_out) of the relative motion (radians)
   double impulse_normal = 0, impulse_tangential = 0;  // on the moving sphere (along +z, +x)
   bool separated = false;
   long steps = 0;
@@ -137,7 +137,8 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
       r.force_normal.push_back(k.overlap > 0 ? fz : 0.0);
       r.force_tangential.push_back(k.overlap > 0 ? fx : 0.0);
     }
-    if (t_start < 0 && prev <= 0 && k.overlap > 0) t_start = t - s.dt * k.overlap / (k.overlap - prev);
+    if (t_start < 0 && prev <= 0 && k.overlap > 0)
+      t_start = t - s.dt * k.overlap / (k.overlap - prev);
     if (t_start >= 0 && prev > 0 && k.overlap <= 0) {
       t_end = t - s.dt * k.overlap / (k.overlap - prev);
       r.separated = true;

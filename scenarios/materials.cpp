@@ -48,6 +48,13 @@ MaterialSet MaterialSet::read(const SceneFile& s) {
   return m;
 }
 
+MaterialSet MaterialSet::only(int s) const {
+  MaterialSet one = *this;
+  one.materials = {materials.at(s)};
+  one.slot = {{materials.at(s).name, 0}};
+  return one;
+}
+
 int MaterialSet::at(const SceneFile& s, const std::string& key) const {
   const std::string name = s.text(key);
   const auto it = slot.find(name);
@@ -107,11 +114,11 @@ CoulombTangential MaterialSet::tangential_law() const {
   for (int a = 0; a < n; ++a)
     for (int b = a; b < n; ++b) {
       if (materials[a].rigid() && materials[b].rigid()) continue;
-      const double mu = a == b ? materials[a].friction
-                               : pair(materials[a].friction, materials[b].friction);
-      t.table.p[a][b] = t.table.p[b][a] = {8.0 * effective_shear(a, b),
-                                           mindlin_gt_common(restitution(a, b)), mu, mu,
-                                           CoulombTangential::MindlinRestitution};
+      const double mu =
+          a == b ? materials[a].friction : pair(materials[a].friction, materials[b].friction);
+      t.table.p[a][b] =
+          t.table.p[b][a] = {8.0 * effective_shear(a, b), mindlin_gt_common(restitution(a, b)), mu,
+                             mu, CoulombTangential::MindlinRestitution};
     }
   return t;
 }

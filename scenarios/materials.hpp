@@ -38,6 +38,9 @@ struct MaterialSet {
 
   static MaterialSet read(const SceneFile& scene);
   int at(const SceneFile& scene, const std::string& key) const;  // slot of the named material
+  // The set with one material only (in slot 0), same contact options: a run that uses one
+  // material gets its own time-step guard, not the stiffest and lightest of all pairs.
+  MaterialSet only(int slot) const;
   double pair(double p, double q) const;  // restitution/friction of a pair by the pair rule
   double effective_young(int a, int b) const;
   double effective_shear(int a, int b) const;

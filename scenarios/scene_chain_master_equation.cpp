@@ -48,7 +48,7 @@ EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tone
   ChainBatch<Space> c(cs.spec, ids);
   chain_set_standing_waves(c, tones, tones_each, u0);
   chain_check_time_step(c, cs.dt);
-    chain_accelerations(c);
+  chain_accelerations(c);
   const auto t0 = chain_totals(c);
   const auto e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
   const int L = cs.spec.sites();

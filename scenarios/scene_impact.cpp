@@ -50,8 +50,7 @@ ImpactScene read_scene(const SceneFile& s) {
   s.require(c.wall || c.target_radius > 0, "impact.target_diameter", "must be positive");
   for (double v : c.speeds) s.require(v > 0, "impact.speeds", "must be positive");
   s.require(c.oblique_speed > 0, "impact.oblique_speed", "must be positive");
-  for (double a : c.angles)
-    s.require(a >= 0 && a < 90, "impact.angles_deg", "must lie in [0, 90)");
+  for (double a : c.angles) s.require(a >= 0 && a < 90, "impact.angles_deg", "must lie in [0, 90)");
   s.require(c.steps_per_contact >= 50, "impact.steps_per_contact", "must be at least 50");
   s.require(c.materials.materials[c.sphere].density > 0, "impact.sphere_material",
             "needs a material with a positive density");
@@ -99,17 +98,19 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   make_directories(opts.out_dir);
   const MaterialSet& mats = c.materials;
   const double estar = mats.effective_young(c.sphere, c.target);
-  const double rstar = c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
+  const double rstar =
+      c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
   const double m1 = mats.materials[c.sphere].density * 4.0 / 3.0 * M_PI * std::pow(c.radius, 3);
-  const double m2 = c.wall ? 0.0
-                           : mats.materials[c.target].density * 4.0 / 3.0 * M_PI *
-                                 std::pow(c.target_radius, 3);
+  const double m2 =
+      c.wall ? 0.0
+             : mats.materials[c.target].density * 4.0 / 3.0 * M_PI * std::pow(c.target_radius, 3);
   const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
   const double e_in = mats.restitution(c.sphere, c.target);
-  const double mu = mats.tangential ? (c.sphere == c.target ? mats.materials[c.sphere].friction
-                                                            : mats.pair(mats.materials[c.sphere].friction,
-                                                                        mats.materials[c.target].friction))
-                                    : 0.0;
+  const double mu = mats.tangential
+                        ? (c.sphere == c.target ? mats.materials[c.sphere].friction
+                                                : mats.pair(mats.materials[c.sphere].friction,
+                                                            mats.materials[c.target].friction))
+                        : 0.0;
 
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
@@ -130,7 +131,8 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   // 1. Head-on impacts over the speeds, with both mappings of e to the damping constant.
   Json speeds = Json::array();
   std::vector<double> e_exact, e_common, tc_ratio;
-  for (const std::string& mapping : {std::string("restitution_exact"), std::string("restitution_common")}) {
+  for (const std::string& mapping :
+       {std::string("restitution_exact"), std::string("restitution_common")}) {
     MaterialSet m = mats;
     m.damping = mapping;
     with_material_model(m, [&](const auto& model) {
@@ -168,7 +170,8 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   }
   summary["restitution_error_exact_mapping"] = worst_exact;
   summary["restitution_error_common_mapping"] = worst_common;
-  summary["restitution_speed_spread"] = spread(mats.damping == "restitution_exact" ? e_exact : e_common);
+  summary["restitution_speed_spread"] =
+      spread(mats.damping == "restitution_exact" ? e_exact : e_common);
   std::cout << "restitution over speeds " << c.speeds.front() << " .. " << c.speeds.back()
             << ": input " << e_in << ", largest error exact mapping " << worst_exact
             << ", common mapping " << worst_common << "\n";
@@ -225,8 +228,8 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
       h5.write(g + "/tangential_force", r.force_tangential);
       h5.attribute(g, "angle_deg", a);
       std::cout << "angle " << a << " deg: e_n " << e << ", e_t " << r.restitution_tangential
-                << ", rebound " << r.rebound_angle * 180 / M_PI << " deg, spin out "
-                << r.spin_out << (slides ? " (gross sliding)" : "") << "\n";
+                << ", rebound " << r.rebound_angle * 180 / M_PI << " deg, spin out " << r.spin_out
+                << (slides ? " (gross sliding)" : "") << "\n";
     }
   });
   summary["oblique"] = cases;

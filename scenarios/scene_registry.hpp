@@ -33,6 +33,8 @@ void run_two_particle_linear(const SceneFile&, const RunOptions&);
 void run_isotropic_compression(const SceneFile&, const RunOptions&);
 void run_hysteretic_collision(const SceneFile&, const RunOptions&);
 void run_impact(const SceneFile&, const RunOptions&);
+void run_soft_collision(const SceneFile&, const RunOptions&);
+void run_confined_compression(const SceneFile&, const RunOptions&);
 void run_elastic_moduli(const SceneFile&, const RunOptions&);
 // Reads and checks every key of an elastic_moduli scene without running it.
 void check_elastic_moduli(const SceneFile&);

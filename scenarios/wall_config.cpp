@@ -111,7 +111,8 @@ std::vector<double> wall_quad(const double n[3], const double p[3], const Period
     for (int d = 0; d < 3; ++d) r[d] = box.lo[d] + ((c >> d) & 1) * box.len[d] - p[d];
     const double s1 = r[0] * e1[0] + r[1] * e1[1] + r[2] * e1[2];
     const double s2 = r[0] * e2[0] + r[1] * e2[1] + r[2] * e2[2];
-    lo1 = std::min(lo1, s1), hi1 = std::max(hi1, s1), lo2 = std::min(lo2, s2), hi2 = std::max(hi2, s2);
+    lo1 = std::min(lo1, s1), hi1 = std::max(hi1, s1), lo2 = std::min(lo2, s2),
+    hi2 = std::max(hi2, s2);
   }
   std::vector<double> q;
   const double corners[4][2] = {{lo1, lo2}, {hi1, lo2}, {hi1, hi2}, {lo1, hi2}};
@@ -121,8 +122,7 @@ std::vector<double> wall_quad(const double n[3], const double p[3], const Period
 }
 
 void write_scene_xdmf(const std::string& xdmf_path, const std::string& h5_name,
-                      const std::string& group, int n, const std::string& wall_group,
-                      int nwalls) {
+                      const std::string& group, int n, const std::string& wall_group, int nwalls) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
     << "  <Grid Name=\"scene\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
@@ -147,8 +147,8 @@ void write_scene_xdmf(const std::string& xdmf_path, const std::string& h5_name,
     for (int w = 0; w < 4 * nwalls; ++w) x << (w ? " " : "") << w;
     x << "</DataItem>\n   </Topology>\n   <Geometry GeometryType=\"XYZ\">\n"
       << "    <DataItem Dimensions=\"" << 4 * nwalls
-      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":"
-      << wall_group << "/quads</DataItem>\n   </Geometry>\n  </Grid>\n";
+      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << wall_group
+      << "/quads</DataItem>\n   </Geometry>\n  </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";
   write_text_file(xdmf_path, x.str());

@@ -45,6 +45,7 @@ void write_scene_xdmf(const std::string& xdmf_path, const std::string& h5_name,
 
 // The corners of the polygon where the plane of `w` at its current point cuts the box,
 // reduced to a quad (the plane's extent inside the box along two in-plane directions).
-std::vector<double> wall_quad(const double normal[3], const double point[3], const PeriodicBox& box);
+std::vector<double> wall_quad(const double normal[3], const double point[3],
+                              const PeriodicBox& box);
 
 }  // namespace granular

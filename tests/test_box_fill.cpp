@@ -45,3 +45,24 @@ TEST(BoxFill, RegionTooSmallForTheSetIsAnInputError) {
   for (int d = 0; d < 3; ++d) f.lo[d] = 0, f.hi[d] = 8.0;  // phi would be 2
   EXPECT_THROW(fill_region(f, box), InputError);
 }
+
+TEST(BoxFill, SettlingWaitsForTheMinimumStepsBeforeTrustingTheCriterion) {
+  // A criterion that holds from the start (balls inserted at rest) must not end settling
+  // before min_steps; one that never holds gives -1 after max_steps.
+  long advanced = 0;
+  const auto advance = [&](long n) { advanced += n; };
+  EXPECT_EQ(settle(
+                advance, [] { return true; }, 100, 10000, 2500),
+            2500);
+  EXPECT_EQ(advanced, 2500);
+  advanced = 0;
+  EXPECT_EQ(settle(
+                advance, [] { return true; }, 100, 10000),
+            0);
+  EXPECT_EQ(advanced, 0);
+  advanced = 0;
+  EXPECT_EQ(settle(
+                advance, [] { return false; }, 100, 1000, 200),
+            -1);
+  EXPECT_EQ(advanced, 1000);
+}
