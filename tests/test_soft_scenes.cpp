@@ -1,0 +1,137 @@
+// The soft-particle scenes against closed forms. Three spheres in a row with the outer two
+// launched symmetrically at the centre one: by symmetry the centre never moves, so with
+// classical Hertz each outer sphere makes a head-on impact on a fixed sphere (reduced mass
+// m, not the pair's m/2). Elastic: the largest overlap is Hertz's with m* = m and R* = a/2,
+// and no energy is lost. Damped: the restitution mapping sets the damping for the pair's
+// reduced mass m/2, so against a fixed partner the damping ratio is 1/sqrt 2 of the mapped
+// one and the kinetic energy left is e'^2 of that ratio. Scene-file errors name key and file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/output.hpp"
+#include "granular_config.hpp"
+#include "scenarios/scene_registry.hpp"
+
+using namespace granular;
+
+namespace {
+
+std::string shipped(const std::string& name) {
+  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+std::string temp_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("granular_test_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  return dir.string();
+}
+
+void replace(std::string& text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
+}
+
+// The shipped three/five-sphere scene sampled every step.
+std::string classical_collision_scene() {
+  std::string text = shipped("soft_collision.toml");
+  replace(text, "sample_every = 5", "sample_every = 1");
+  return text;
+}
+
+struct Material {
+  const char* name;
+  double young, poisson, density, restitution;
+};
+// As in soft_collision.toml (E in N/mm^2, density in ug/mm^3).
+const Material kHydrogel{"hydrogel", 0.0233, 0.5, 11.5, 0.95};
+const Material kRubber{"rubber", 1.85, 0.46, 2000, 0.7};
+
+// As the command line does: the driver's name is read before the driver checks the rest.
+SceneFile parse(const std::string& text, const std::string& name) {
+  SceneFile scene = SceneFile::parse(text, name);
+  (void)scene.text("scene");
+  return scene;
+}
+
+double max_of(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
+
+}  // namespace
+
+TEST(SoftCollisionScene, ElasticThreeInARowIsHertzImpactOnAFixedSphere) {
+  std::string text = classical_collision_scene();
+  replace(text, "restitution = 0.95", "restitution = 1.0");
+  RunOptions opts;
+  opts.out_dir = temp_dir("soft_elastic");
+  opts.progress = false, opts.charts = false;
+  run_soft_collision(parse(text, "soft_elastic.toml"), opts);
+  const H5Reader r(opts.out_dir + "/results.h5");
+  const double a = r.attribute("/", "radius"), v = 0.01;
+  // Hydrogel only: elastic rubber at 10 m/s would overlap by 0.98 a, past the guard.
+  for (const Material& m : {kHydrogel}) {
+    const std::string g = std::string("/runs/three/") + m.name + "/classical";
+    const auto ekin = r.reals(g + "/kinetic_energy");
+    const auto overlap = r.reals(g + "/centre_overlap");
+    const double mass = m.density * 4.0 / 3.0 * M_PI * a * a * a;
+    const double e_star = m.young / (2 * (1 - m.poisson * m.poisson));
+    const double delta =
+        std::pow(15 * mass * v * v / (16 * e_star * std::sqrt(0.5 * a)), 0.4);  // m* = m
+    EXPECT_NEAR(max_of(overlap) / delta, 1.0, 5e-4) << m.name;
+    EXPECT_NEAR(ekin.back() / ekin.front(), 1.0, 1e-6) << m.name;
+    EXPECT_EQ(overlap.back(), 0.0) << m.name;  // the collision is over
+  }
+}
+
+TEST(SoftCollisionScene, DampedThreeInARowKeepsTheEnergyOfHalfTheReducedMassDamping) {
+  RunOptions opts;
+  opts.out_dir = temp_dir("soft_damped");
+  opts.progress = false, opts.charts = false;
+  run_soft_collision(parse(classical_collision_scene(), "soft_damped.toml"), opts);
+  const H5Reader r(opts.out_dir + "/results.h5");
+  for (const Material& m : {kHydrogel, kRubber}) {
+    const auto ekin = r.reals(std::string("/runs/three/") + m.name + "/classical/kinetic_energy");
+    // The law is a linear oscillator in disguise: e = exp(-pi z / sqrt(1 - z^2)).
+    const double l = std::log(m.restitution);
+    const double zeta = -l / std::sqrt(l * l + M_PI * M_PI) / std::sqrt(2.0);
+    const double e_fixed = std::exp(-M_PI * zeta / std::sqrt(1 - zeta * zeta));
+    EXPECT_NEAR(ekin.back() / ekin.front() / (e_fixed * e_fixed), 1.0, 2e-3) << m.name;
+    // Against the pair's own restitution the difference is several per cent.
+    EXPECT_GT(ekin.back() / ekin.front(), m.restitution * m.restitution * 1.02) << m.name;
+  }
+}
+
+TEST(ConfinedCompressionScene, ErrorsNameTheKeyAndTheFile) {
+  const std::string base = shipped("confined_compression_quick.toml");
+  const std::pair<std::string, std::string> mutants[] = {
+      {"wall_speed = 1e-4", "wal_speed = 1e-4"},  // misspelt: wall_speed is missing
+      {"max_time = 3e6", "max_time = 1e4"},       // shorter than the fall
+      {"strain = 0.134", "strain = nan"},         // not a strain
+      {"particle_material = \"hydrogel\"", "particle_material = \"glass\""}};
+  const char* keys[] = {"compression.wall_speed", "fill.max_time", "compression.strain",
+                        "compression.particle_material"};
+  for (size_t k = 0; k < std::size(mutants); ++k) {
+    std::string text = base;
+    replace(text, mutants[k].first, mutants[k].second);
+    RunOptions opts;
+    opts.out_dir = temp_dir("confined_bad");
+    opts.progress = false, opts.charts = false;
+    try {
+      run_confined_compression(parse(text, "bad_box.toml"), opts);
+      ADD_FAILURE() << keys[k] << ": the run must stop";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(keys[k]), std::string::npos) << what;
+      EXPECT_NE(what.find("bad_box.toml"), std::string::npos) << what;
+    }
+    EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
+  }
+}
