@@ -10,7 +10,8 @@ h5, outdir = sys.argv[1], sys.argv[2]
 with h5py.File(h5, "r") as f:
     a = f.attrs["radius"]
     runs = f["runs"]
-    panels = [(lay, mat) for lay in runs for mat in runs[lay]]
+    layouts = sorted(runs, key=lambda lay: lay != "three")  # three in a row first
+    panels = [(lay, mat) for lay in layouts for mat in runs[lay]]
     for quantity, ylabel, name in (
         ("kinetic_energy", "kinetic energy (uJ)", "kinetic_energy.png"),
         ("centre_overlap", "centre overlap / radius", "centre_overlap.png"),
