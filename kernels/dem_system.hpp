@@ -208,6 +208,13 @@ class DemSystem {
           << "): delta/a = " << m.max_overlap << " exceeds the limit " << params_.max_overlap
           << " of binary contact laws; reduce the strain rate, the final volume fraction, the"
           << " initial velocities or dt";
+      // MC-strain takes the other contacts' forces of the previous step: under load its
+      // feedback gain (growing with the number of contacts and with sqrt(delta/d)) passes 1 and the
+      // overlap grows geometrically, whatever dt; only a lighter load or a smaller gamma helps.
+      if (mc_.options().mode == MultiContact::Strain)
+        msg << "; with MC-strain (gamma = " << mc_.options().gamma
+            << ") this is the explicit correction's feedback outgrowing the contact: lower"
+            << " the load or gamma, or use MC-stress";
       throw PhysicsError(msg.str());
     }
     // Kinetic energy per particle that could drive an overlap beyond the limit on impact.
