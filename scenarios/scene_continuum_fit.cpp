@@ -3,6 +3,7 @@
 //   parse -> spec example (regression of the source's isotropic path) -> fit each study and
 //   preparation friction -> isotropic validation on the preparation path -> DEM pure shear
 //   against the law -> write (results.h5, summary.json, constants.txt, charts).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -204,7 +205,13 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       j["dimensionless_scale"] =
           "K* = K dbar / kn_mean; with a constant kn_mean (linear contacts) divide K0, K1, G0, "
           "G1 by kn/dbar";
-      j["kn_over_dbar_MPa"] = d.kn_mean.front() / d.d_mean;
+      // A single scale exists only where every configuration has the same contact stiffness
+      // (linear contacts); Hertz stiffnesses grow with the overlap.
+      const auto [kn_lo, kn_hi] = std::minmax_element(d.kn_mean.begin(), d.kn_mean.end());
+      if (*kn_hi - *kn_lo <= 1e-12 * *kn_hi)
+        j["kn_over_dbar_MPa"] = d.kn_mean.front() / d.d_mean;
+      else
+        j["kn_over_dbar_MPa"] = "varies with phi (kn_mean of each configuration): no single scale";
       Json& jc = j["constants"];
       jc = Json::object();
       constants_txt << "\n[" << d.name << "]  # study " << set.study << "\n";

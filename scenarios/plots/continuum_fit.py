@@ -10,13 +10,19 @@ import numpy as np
 from chartkit import plt, save
 
 h5, outdir = sys.argv[1], sys.argv[2]
+
+
+def text(attr):
+    """HDF5 string attributes come back as bytes or str depending on how they were stored."""
+    return attr.decode() if isinstance(attr, bytes) else str(attr)
+
+
 with h5py.File(h5, "r") as f:
     fits = {}
     for key in f["fit"]:
         g = f["fit"][key]
         fits[key] = {
-            "name": g.attrs["data_set"].decode() if isinstance(g.attrs["data_set"], bytes)
-            else str(g.attrs["data_set"]),
+            "name": text(g.attrs["data_set"]),
             **{"data_" + k: g["data"][k][:] for k in g["data"]},
             **{"prep_" + k: g["preparation"][k][:] for k in g["preparation"]},
             **{"law_" + k: g["law"][k][:] for k in g["law"]},
@@ -24,7 +30,7 @@ with h5py.File(h5, "r") as f:
         }
     example = {k: {c: f["example"][k][c][:] for c in f["example"][k]} for k in f["example"]}
     shear = {k: f["shear"][k][:] for k in f["shear"]} if "shear" in f else None
-    shear_fit = f["shear"].attrs["fit"] if "shear" in f else None
+    shear_fit = text(f["shear"].attrs["fit"]) if "shear" in f else None
 
 studies = sorted({k.rsplit("_mu", 1)[0] for k in fits})
 colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -87,7 +93,7 @@ if shear is not None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     e = shear["strain"]
     axes[0].plot(e, shear["dev_dem"], "o-", ms=3, label="DEM")
-    axes[0].plot(e, shear["dev_law"], "-", label="law (" + str(shear_fit) + ")")
+    axes[0].plot(e, shear["dev_law"], "-", label="law (" + shear_fit + ")")
     axes[0].set_xlabel("axial strain eps_xx (pure shear)"), axes[0].set_ylabel("sigma_xx - sigma_yy (MPa)")
     axes[0].legend()
     axes[1].plot(e, shear["p_dem"], "o-", ms=3, label="DEM")
