@@ -74,6 +74,21 @@ PathRecord drive_to_volume_fraction(MaterialPoint& p, const Mat3& f, double nu_t
   return r;
 }
 
+TangentModuli numerical_tangent(const ContinuumConstants& law, double nu, VolumeFractionUpdate u,
+                                double eta) {
+  auto sigma = [&](double a, double b, double c) {
+    MaterialPoint p(law, nu, u);
+    p.step_to(Eigen::Vector3d(std::exp(a), std::exp(b), std::exp(c)).asDiagonal());
+    return p.cauchy();
+  };
+  TangentModuli t;
+  t.K = (sigma(eta, eta, eta).trace() - sigma(-eta, -eta, -eta).trace()) / 3 / (6 * eta);
+  const Mat3 up = sigma(eta, -eta, 0), down = sigma(-eta, eta, 0);
+  t.G = ((up(0, 0) - up(1, 1)) - (down(0, 0) - down(1, 1))) / (8 * eta);
+  t.M = (sigma(eta, 0, 0)(0, 0) - sigma(-eta, 0, 0)(0, 0)) / (2 * eta);
+  return t;
+}
+
 DeformationTable parse_deformation_table(const std::string& text, const std::string& source) {
   DeformationTable t;
   std::istringstream in(text);

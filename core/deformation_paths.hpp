@@ -32,6 +32,15 @@ PathRecord drive(MaterialPoint& p, const Mat3& f, long steps);
 PathRecord drive_to_volume_fraction(MaterialPoint& p, const Mat3& f, double nu_target,
                                     long max_steps = 100000000);
 
+// Tangent moduli of the update by central differences of the Cauchy stress over +-eta of
+// true strain from a stress-free point at nu (isotropic for K, isochoric pure shear for G,
+// uniaxial for M): what an FE code sees from one step, to compare with K(nu), G(nu).
+struct TangentModuli {
+  double K = 0, G = 0, M = 0;
+};
+TangentModuli numerical_tangent(const ContinuumConstants& law, double nu, VolumeFractionUpdate u,
+                                double eta = 1e-5);
+
 // A deformation-gradient history: rows of time and F (row-major F11 F12 F13 F21 ... F33).
 struct DeformationTable {
   std::vector<double> time;

@@ -30,6 +30,10 @@ struct Setup {
   double z_min = 0;
   std::vector<DataSet> data;
   double example_step = 0, example_nu_end = 0;
+  // A deformation-gradient history (file of time and F rows) driven through one fitted law.
+  std::string history_file, history_data;
+  double history_fit_mu = 0, history_nu_start = 0;
+  int history_substeps = 1;
   bool shear = false;
   std::string shear_data;  // the fit (data set and preparation friction) the shear run checks
   double shear_fit_mu = 0;
@@ -49,6 +53,16 @@ Setup read_setup(const SceneFile& scene) {
   s.example_step = scene.real("example.step", -1e-4);
   s.example_nu_end = scene.real("example.nu_end", 0.82);
   scene.require(s.example_step < 0, "example.step", "must be negative (compression)");
+  s.history_file = scene.text("history.file", "");
+  if (!s.history_file.empty()) {
+    s.history_data = scene.text("history.data");
+    s.history_fit_mu = scene.real("history.fit_mu");
+    s.history_nu_start = scene.real("history.nu_start");
+    s.history_substeps = static_cast<int>(scene.integer("history.substeps", 1));
+    scene.require(s.history_nu_start > 0 && s.history_nu_start < 1, "history.nu_start",
+                  "must lie in (0, 1)");
+    scene.require(s.history_substeps >= 1, "history.substeps", "must be at least 1");
+  }
   s.shear = scene.flag("shear.run");
   if (s.shear) {
     s.shear_data = scene.text("shear.data");
@@ -236,6 +250,19 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       jr["fabric"] = fit_json(f.fabric, "F_v = g3 C* nu against the table's fabric trace");
       jr["bulk"] = fit_json(f.bulk, "K = K0 + K1 (F_v - F_v0), MPa");
       jr["shear"] = fit_json(f.shear, "G = G0 + G1 (F_v - F_v0)^G2, MPa");
+      // The update's own tangent at the data's volume fractions against K(nu), G(nu): what an
+      // FE code integrating this law sees in one step.
+      double dK = 0, dG = 0;
+      for (double phi : d.phi) {
+        const ContinuumModuli m = continuum_moduli(f.law, phi);
+        const TangentModuli t = numerical_tangent(f.law, phi, s.update);
+        if (m.K > 0) dK = std::max(dK, std::abs(t.K - m.K) / m.K);
+        if (m.G > 0) dG = std::max(dG, std::abs(t.G - m.G) / m.G);
+      }
+      Json& jt = j["tangent_check"];
+      jt = Json::object();
+      jt["max_relative_difference_K"] = dK;
+      jt["max_relative_difference_G"] = dG;
       Json& jv = j["isotropic_validation"];
       jv = Json::object();
       jv["path"] =
@@ -281,7 +308,38 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
   }
   write_text_file(opts.out_dir + "/constants.txt", constants_txt.str());
 
-  // 3. DEM pure shear against the law fitted to the matching preparation.
+  // 3. A tabulated deformation history through one fitted law.
+  if (!s.history_file.empty()) {
+    std::ostringstream k;
+    k << s.history_data << "_mu" << s.history_fit_mu;
+    const auto it = fits.find(k.str());
+    if (it == fits.end())
+      throw InputError(scene.path() + ": history.data / history.fit_mu name no fitted data set (" +
+                       k.str() + ")");
+    const DeformationTable table = read_deformation_table(s.history_file);
+    MaterialPoint p(it->second.law, s.history_nu_start, s.update);
+    const PathRecord r = drive_table(p, table, s.history_substeps);
+    std::vector<double> time = {table.time.front()};
+    for (size_t row = 1; row < table.time.size(); ++row)
+      for (int q = 1; q <= s.history_substeps; ++q)
+        time.push_back(table.time[row - 1] +
+                       (table.time[row] - table.time[row - 1]) * q / s.history_substeps);
+    h5.write("/history/time", time), h5.write("/history/nu", r.nu);
+    h5.write("/history/pressure", r.pressure), h5.write("/history/deviatoric", r.deviatoric);
+    h5.write("/history/tau", r.tau, {r.size(), 9});
+    h5.attribute("/history", "fit", it->first);
+    Json& jh = summary["history"];
+    jh = Json::object();
+    jh["file"] = s.history_file;
+    jh["fit"] = it->first;
+    jh["rows"] = static_cast<long>(table.time.size());
+    jh["steps"] = static_cast<long>(r.size() - 1);
+    jh["nu_end"] = p.nu();
+    jh["pressure_end_MPa"] = p.pressure();
+    jh["von_mises_end_MPa"] = p.deviatoric();
+  }
+
+  // 4. DEM pure shear against the law fitted to the matching preparation.
   if (s.shear) {
     std::ostringstream k;
     k << s.shear_data << "_mu" << s.shear_fit_mu;

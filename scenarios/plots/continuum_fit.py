@@ -31,6 +31,8 @@ with h5py.File(h5, "r") as f:
     example = {k: {c: f["example"][k][c][:] for c in f["example"][k]} for k in f["example"]}
     shear = {k: f["shear"][k][:] for k in f["shear"]} if "shear" in f else None
     shear_fit = text(f["shear"].attrs["fit"]) if "shear" in f else None
+    history = {k: f["history"][k][:] for k in f["history"]} if "history" in f else None
+    history_fit = text(f["history"].attrs["fit"]) if "history" in f else None
 
 studies = sorted({k.rsplit("_mu", 1)[0] for k in fits})
 colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -109,3 +111,12 @@ ax.set_xlabel("nu"), ax.set_ylabel("Cauchy pressure (source's units)")
 ax.set_title("source's example: isotropic compression nu0 = 0.665 -> 0.82")
 ax.legend()
 save(fig, outdir, "spec_example.png")
+
+if history is not None:
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(history["time"], history["pressure"], label="pressure")
+    ax.plot(history["time"], history["deviatoric"], label="von Mises stress")
+    ax.set_xlabel("time (table units)"), ax.set_ylabel("Cauchy stress (MPa)")
+    ax.set_title("tabulated F history, law " + history_fit)
+    ax.legend()
+    save(fig, outdir, "history.png")
