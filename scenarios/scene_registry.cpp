@@ -23,6 +23,10 @@ const std::vector<SceneEntry>& scene_registry() {
       {"elastic_moduli",
        "preparation protocol, unloading-branch configurations, elastic probing vs theory",
        run_elastic_moduli},
+      // continuum law
+      {"continuum_fit",
+       "hypoelastic continuum law fitted to the moduli studies, checked on DEM paths",
+       run_continuum_fit},
       // chain scenes
       {"chain_impulse",
        "impulse on disordered granular chains: energy profile, spreading, localization",
