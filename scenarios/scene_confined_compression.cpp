@@ -188,6 +188,8 @@ struct Curve {
   std::vector<double> time, strain, force, position;
   double wall_seconds = 0, max_force = 0;
   long steps = 0;
+  std::string failure;  // why the run stopped early (empty: it finished)
+  WallSeries walls;     // every wall's position, force, torque and contacts
 };
 
 template <class Model>
@@ -210,10 +212,20 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
   if (mc.mode != MultiContact::None) sys.set_multicontact(mc);
   const long steps = static_cast<long>(std::ceil(2 * t_half / c.dt));
   Curve out;
+  out.walls.resize(walls);
   Progress progress(label, steps, opts.progress);
   auto sample = [&]() {
     const auto loads = sys.wall_loads();
     const double z = sys.walls().host()(5).p[2];
+    out.walls.time.push_back(sys.time());
+    for (size_t w = 0; w < loads.size(); ++w) {
+      for (int d = 0; d < 3; ++d) {
+        out.walls.position[w].push_back(sys.walls().host()(w).p[d]);
+        out.walls.force[w].push_back(loads[w].force[d]);
+        out.walls.torque[w].push_back(loads[w].torque[d]);
+      }
+      out.walls.contacts[w].push_back(loads[w].contacts);
+    }
     out.time.push_back(sys.time());
     out.position.push_back(z);
     out.strain.push_back((H - z) / H);
@@ -225,7 +237,14 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
   bool snapped = false;
   for (long s = 0; s < steps; s += c.sample_every) {
     sys.step(std::min(c.sample_every, steps - s));
-    sys.check_health(sys.measure());
+    // A model that breaks down (MC-strain's explicit feedback at large loads) ends its own
+    // curve, not the study: the curve up to there and the reason are kept.
+    try {
+      sys.check_health(sys.measure());
+    } catch (const PhysicsError& e) {
+      out.failure = e.what();
+      break;
+    }
     sample();
     progress.update(sys.steps());
     if (snap && !snapped && sys.time() >= t_half) {  // the most compressed state
@@ -279,14 +298,23 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
     h5.write(g + "/top_wall_force", curve.force);
     h5.write(g + "/top_wall_position", curve.position);
     h5.attribute(g, "wall_seconds", curve.wall_seconds);
+    curve.walls.write(h5, g + "/walls");
     Json j = Json::object();
     j["max_force"] = curve.max_force;
     j["wall_seconds"] = curve.wall_seconds;
     j["steps"] = curve.steps;
     j["particle_steps_per_second"] = curve.steps * c.fill.count / curve.wall_seconds;
+    if (!curve.failure.empty()) {
+      j["failure"] = curve.failure;
+      j["failed_at_strain"] = curve.strain.back();
+      j["failed_on_loading"] = curve.time.back() <= c.strain * c.size[2] / c.wall_speed;
+      h5.attribute(g, "failure", curve.failure);
+    }
     models[sm.label] = j;
     std::cout << sm.label << ": largest top-wall force " << curve.max_force << " N, "
               << curve.wall_seconds << " s wall clock (" << curve.steps << " steps)\n";
+    if (!curve.failure.empty())
+      std::cout << "  stopped at strain " << curve.strain.back() << ": " << curve.failure << "\n";
   }
   summary["models"] = models;
   if (c.experiment_force > 0) {

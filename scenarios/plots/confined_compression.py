@@ -11,8 +11,10 @@ with h5py.File(h5, "r") as f:
     fig, ax = plt.subplots(figsize=(5.2, 3.8))
     for model in f["runs"]:
         g = f["runs"][model]
-        ax.plot(g["strain"][:] * 100, g["top_wall_force"][:], lw=1.1,
-                label=f"{model} ({g.attrs['wall_seconds']:.1f} s)")
+        note = f"{g.attrs['wall_seconds']:.1f} s"
+        if "failure" in g.attrs:  # the model broke down: its curve ends there
+            note = f"diverged at {g['strain'][-1] * 100:.1f} %"
+        ax.plot(g["strain"][:] * 100, g["top_wall_force"][:], lw=1.1, label=f"{model} ({note})")
     fx, sx = f.attrs["experiment_max_force"], f.attrs["experiment_strain"]
     if fx > 0:
         ax.plot([sx * 100], [fx], "k*", ms=10, label="experiment (maximum)")
