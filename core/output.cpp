@@ -1,11 +1,17 @@
 // Atomic output files, JSON, HDF5 (see output.hpp).
 #include "core/output.hpp"
 
-#include <cctype>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -92,7 +98,8 @@ void Json::dump_to(std::string& out, int indent, int depth) const {
       const size_t sign = (t[i] == '-' || t[i] == '+') ? 1 : 0;
       for (const char* word : {"inf", "nan"})
         if (t.compare(i + sign, 3, word) == 0 &&
-            (i + sign + 3 == t.size() || !std::isalnum(static_cast<unsigned char>(t[i + sign + 3]))))
+            (i + sign + 3 == t.size() ||
+             !std::isalnum(static_cast<unsigned char>(t[i + sign + 3]))))
           return sign + 3;
       return 0;
     };
@@ -143,11 +150,38 @@ std::string partial_name(const std::string& path) {
   return (p.parent_path() / ("." + p.filename().string() + ".partial")).string();
 }
 
+namespace {
+// Flushes a file's (or directory's) data to the device: a rename is only as durable as the
+// bytes behind it, and a crash between write-back and rename must not leave a complete-
+// looking file with missing contents under the final name.
+void sync_path(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
+  if (fd < 0)
+    throw std::runtime_error("cannot open " + path + " to flush it: " + std::strerror(errno));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  // Some file systems cannot sync directories (EINVAL); the file's own data is what matters.
+  if (rc != 0 && !(directory && (err == EINVAL || err == EROFS)))
+    throw std::runtime_error("cannot flush " + path + " to disk: " + std::strerror(err));
+}
+}  // namespace
+
 void commit_file(const std::string& partial, const std::string& path) {
+  try {
+    sync_path(partial, false);
+  } catch (...) {
+    std::remove(partial.c_str());  // the previous complete file, if any, stays in place
+    throw;
+  }
   std::error_code ec;
   fs::rename(partial, path, ec);
-  if (ec)
+  if (ec) {
+    std::remove(partial.c_str());
     throw std::runtime_error("cannot rename " + partial + " to " + path + ": " + ec.message());
+  }
+  const fs::path dir = fs::path(path).parent_path();
+  sync_path(dir.empty() ? "." : dir.string(), true);
 }
 
 void make_directories(const std::string& dir) {
@@ -160,10 +194,14 @@ void write_text_file(const std::string& path, const std::string& content) {
   const std::string tmp = partial_name(path);
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error("cannot write " + tmp);
+    if (!f) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
     f << content;
     f.flush();
-    if (!f) throw std::runtime_error("write failed: " + tmp);
+    f.close();
+    if (!f) {
+      std::remove(tmp.c_str());
+      throw std::runtime_error("write failed (disk full?): " + tmp);
+    }
   }
   commit_file(tmp, path);
 }
@@ -225,9 +263,11 @@ void H5Writer::attribute(const std::string& object, const std::string& name, dou
   hid_t space = H5Screate(H5S_SCALAR);
   hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), H5T_NATIVE_DOUBLE, space,
                                  H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attr, H5T_NATIVE_DOUBLE, &value);
-  H5Aclose(attr);
+  const herr_t st = attr < 0 ? -1 : H5Awrite(attr, H5T_NATIVE_DOUBLE, &value);
+  if (attr >= 0) H5Aclose(attr);
   H5Sclose(space);
+  if (st < 0)
+    throw std::runtime_error("cannot write attribute " + object + "@" + name + " in " + partial_);
 }
 
 void H5Writer::attribute(const std::string& object, const std::string& name,
@@ -238,16 +278,25 @@ void H5Writer::attribute(const std::string& object, const std::string& name,
   hid_t space = H5Screate(H5S_SCALAR);
   hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), type, space, H5P_DEFAULT,
                                  H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attr, type, value.c_str());
-  H5Aclose(attr);
+  const herr_t st = attr < 0 ? -1 : H5Awrite(attr, type, value.c_str());
+  if (attr >= 0) H5Aclose(attr);
   H5Sclose(space);
   H5Tclose(type);
+  if (st < 0)
+    throw std::runtime_error("cannot write attribute " + object + "@" + name + " in " + partial_);
 }
 
 void H5Writer::commit() {
-  H5Fflush(file_, H5F_SCOPE_GLOBAL);
-  H5Fclose(file_);
+  // A failed flush or close (full disk, I/O error) leaves a file that would look whole:
+  // refuse it, remove the partial file, keep whatever complete file had the name before.
+  const herr_t flushed = H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  const herr_t closed = H5Fclose(file_);
   file_ = -1;
+  if (flushed < 0 || closed < 0) {
+    std::remove(partial_.c_str());
+    throw std::runtime_error("cannot complete HDF5 file " + partial_ +
+                             " (disk full or I/O error); " + path_ + " was left as it was");
+  }
   commit_file(partial_, path_);
   committed_ = true;
 }
@@ -297,8 +346,11 @@ double H5Reader::attribute(const std::string& object, const std::string& name) c
   double v = 0;
   hid_t attr = H5Aopen_by_name(file_, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
   if (attr < 0) throw InputError("HDF5 file " + path_ + " lacks attribute " + object + "@" + name);
-  H5Aread(attr, H5T_NATIVE_DOUBLE, &v);
+  const herr_t st = H5Aread(attr, H5T_NATIVE_DOUBLE, &v);
   H5Aclose(attr);
+  if (st < 0)
+    throw InputError("cannot read attribute " + object + "@" + name + " from " + path_ +
+                     " as a number");
   return v;
 }
 
@@ -335,8 +387,22 @@ bool run_plot_script(const std::string& script, const std::string& h5, const std
               << " not found); the data is in " << h5 << "\n";
     return false;
   }
-  const std::string cmd = python + " '" + path + "' '" + h5 + "' '" + outdir + "'";
-  const int rc = std::system(cmd.c_str());
+  // The interpreter is started directly with an argument vector: paths reach it as they are,
+  // whatever quotes or shell syntax they hold (no shell ever parses them).
+  std::vector<std::string> args = {python, path, h5, outdir};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  std::cerr.flush();
+  pid_t pid = -1;
+  int rc = ::posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ);
+  if (rc == 0) {
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
   if (rc != 0) {
     std::cerr << "warning: plotting script " << path << " failed (exit " << rc
               << "); the data is in " << h5 << "\n";

@@ -7,6 +7,7 @@
 
 #include "core/output.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/temp_paths.hpp"
 
 using namespace granular;
 
@@ -50,7 +51,7 @@ std::vector<double> final_positions(const std::string& dir) {
 }  // namespace
 
 TEST(CheckpointResume, InterruptedAndResumedRunEqualsUninterruptedRunBitwise) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_resume_test";
+  const auto root = granular::testing::unique_temp_path("granular_resume_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;

@@ -13,6 +13,7 @@
 #include "core/output.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/temp_paths.hpp"
 
 using namespace granular;
 
@@ -24,7 +25,7 @@ std::string shipped(const std::string& name) {
   return ss.str();
 }
 std::string temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("granular_test_" + name);
+  const auto dir = granular::testing::unique_temp_path("granular_test_" + name);
   std::filesystem::remove_all(dir);
   return dir.string();
 }

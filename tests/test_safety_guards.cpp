@@ -9,6 +9,7 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/packing.hpp"
+#include "tests/temp_paths.hpp"
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;
@@ -82,7 +83,7 @@ TEST(SafetyGuards, GentleGasPassesTheHealthCheck) {
 }
 
 TEST(AtomicOutput, UnfinishedFileNeverAppearsUnderItsFinalName) {
-  const auto dir = std::filesystem::temp_directory_path() / "granular_atomic_test";
+  const auto dir = granular::testing::unique_temp_path("granular_atomic_test");
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "results.h5").string();

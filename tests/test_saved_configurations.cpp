@@ -15,6 +15,7 @@
 #include "scenarios/moduli_outputs.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/temp_paths.hpp"
 
 using namespace granular;
 
@@ -96,7 +97,7 @@ TEST(SavedConfigurations, HdfRoundTripIsBitwiseIncludingContactHistory) {
   const ConfigState a = snapshot(sys, density, sys.measure().pressure);
   ASSERT_EQ(a.history_width, 3);
   ASSERT_GT(a.pair_i.size(), 50u);  // contacts with a tangential spring
-  const auto path = std::filesystem::temp_directory_path() / "granular_config_roundtrip.h5";
+  const auto path = granular::testing::unique_temp_path("granular_config_roundtrip.h5");
   write_config(path.string(), a);
   const ConfigState b = read_config(path.string());
   std::filesystem::remove(path);
@@ -138,7 +139,7 @@ TEST(SavedConfigurations, HdfRoundTripIsBitwiseIncludingContactHistory) {
 }
 
 TEST(SavedConfigurations, ProbingALoadedConfigurationGivesTheInRunModuliBitwise) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_saved_config_test";
+  const auto root = granular::testing::unique_temp_path("granular_saved_config_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;
@@ -247,7 +248,7 @@ TEST(SavedConfigurations, SharedReferenceRunGivesBitwiseTheModuliOfOwnReferenceR
 }
 
 TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterruptedStudyBitwise) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_variant_resume_test";
+  const auto root = granular::testing::unique_temp_path("granular_variant_resume_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;
@@ -299,7 +300,7 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
 }
 
 TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqualsUninterrupted) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_stage_resume_test";
+  const auto root = granular::testing::unique_temp_path("granular_stage_resume_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;
@@ -333,7 +334,7 @@ TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqua
 // the preparation as complete and reruns nothing. A pointer that is not a stage number is an
 // error, not a silent fresh start.
 TEST(SavedConfigurations, CheckpointPastTheLastStageResumesAsCompletePreparation) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_past_last_stage_test";
+  const auto root = granular::testing::unique_temp_path("granular_past_last_stage_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;
@@ -429,7 +430,7 @@ TEST(SavedConfigurations, JammedMeansMostParticlesKeepTheContactThreshold) {
 // reported with zero moduli without being probed (no reversal residual), skips the halving
 // probes, and the halving criterion is taken over the jammed configurations only.
 TEST(SavedConfigurations, UnjammedConfigurationIsNotProbedAndLeftOutOfHalvingCheck) {
-  const auto root = std::filesystem::temp_directory_path() / "granular_unjammed_test";
+  const auto root = granular::testing::unique_temp_path("granular_unjammed_test");
   std::filesystem::remove_all(root);
   RunOptions opts;
   opts.progress = false, opts.charts = false;

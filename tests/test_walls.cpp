@@ -25,7 +25,8 @@ LinearNormal linear_with_wall(double kn, double gn, double kw, double gw) {
 }
 // Hertz modulus form; a rigid wall (E = inf) drops its term of 1/E*.
 HertzNormal hertz_with_wall(double E, double nu, double E_wall, double nu_wall) {
-  HertzNormal h{PairTable<HertzNormal::Params>::uniform(HertzNormal::modulus_form(E, nu, E, nu, 0))};
+  HertzNormal h{
+      PairTable<HertzNormal::Params>::uniform(HertzNormal::modulus_form(E, nu, E, nu, 0))};
   h.table.p[0][1] = h.table.p[1][0] = HertzNormal::modulus_form(E, nu, E_wall, nu_wall, 0);
   return h;
 }
@@ -132,8 +133,8 @@ TYPED_TEST(WallTest, GrossSlidingOnWallTransfersMuTimesOnePlusETimesNormalImpuls
   // uses |f_n|, transfers slightly more than mu times the net normal impulse.
   const double kn = 1e5, gn = 0.0, mu = 0.2, a = 1.0, rho = 1.0, v = 0.01;
   using Model = ContactModel<LinearNormal, CoulombTangential>;
-  const Model model{linear_with_wall(kn, gn, kn, gn), CoulombTangential::uniform(8e4, 0, mu, mu),
-                    {}};
+  const Model model{
+      linear_with_wall(kn, gn, kn, gn), CoulombTangential::uniform(8e4, 0, mu, mu), {}};
   ImpactSetup s;
   s.radius1 = a, s.density1 = rho, s.speed = v, s.angle = 0.3;
   s.spin[1] = -20 * mu * v / a;  // contact point moves along +x, faster than the centre
@@ -163,8 +164,8 @@ TYPED_TEST(WallTest, ElasticWallMovingIntoRestingSphereLaunchesItAtTwiceItsSpeed
   DemParams prm;
   const double m = sphere_mass(a, 1.0);
   prm.dt = M_PI * std::sqrt(m / kn) / 2000, prm.skin = 0.1;
-  DemSystem<Exec, ContactModel<LinearNormal>> sys(
-      Particles<Exec>::from_host(h), box, {linear_with_wall(kn, 0, kn, 0), {}, {}}, prm);
+  DemSystem<Exec, ContactModel<LinearNormal>> sys(Particles<Exec>::from_host(h), box,
+                                                  {linear_with_wall(kn, 0, kn, 0), {}, {}}, prm);
   WallSpec floor;
   floor.normal[2] = -1, floor.point[2] = 1.0, floor.motion = WallMotion::Velocity;
   floor.velocity[2] = V;
@@ -173,7 +174,8 @@ TYPED_TEST(WallTest, ElasticWallMovingIntoRestingSphereLaunchesItAtTwiceItsSpeed
   sys.step(steps);
   auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().v);
   EXPECT_NEAR(v(0, 2), 2 * V, 1e-6 * V);
-  EXPECT_NEAR(sys.walls().host()(0).p[2], 1.0 + V * steps * prm.dt, 1e-10);  // t summed step by step
+  EXPECT_NEAR(sys.walls().host()(0).p[2], 1.0 + V * steps * prm.dt,
+              1e-10);  // t summed step by step
 }
 
 namespace {
@@ -209,10 +211,11 @@ struct Pile {
   }
   DemSystem<Exec, Model> system(long rebuild_every, bool sort) const {
     DemParams prm;
-    prm.dt = 2e-3, prm.skin = 0.1, prm.damping.translational = 0.05, prm.rebuild_every = rebuild_every;
+    prm.dt = 2e-3, prm.skin = 0.1, prm.damping.translational = 0.05,
+    prm.rebuild_every = rebuild_every;
     prm.damping.rotational = 0.01, prm.sort = sort, prm.gravity[2] = -1.0;
-    const Model model{linear_with_wall(1e3, 0.5, 1e3, 0.5),
-                      CoulombTangential::uniform(800, 0.1, 0.4, 0.4), {}};
+    const Model model{
+        linear_with_wall(1e3, 0.5, 1e3, 0.5), CoulombTangential::uniform(800, 0.1, 0.4, 0.4), {}};
     DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
     sys.set_walls(walls);
     return sys;
@@ -242,7 +245,8 @@ TYPED_TEST(WallTest, SettledPileWeighsOnTheFloorAndSideWallsBalance) {
   double net[3] = {0, 0, 0};
   for (int i = 0; i < sys.particles().n; ++i)
     for (int d = 0; d < 3; ++d) net[d] += f(i, d) + gb * (v(i, d) - 0.5 * dt * f(i, d) / mass(i));
-  for (int d = 0; d < 3; ++d) EXPECT_NEAR(walls[d] + net[d], d == 2 ? -weight : 0.0, 1e-12 * weight);
+  for (int d = 0; d < 3; ++d)
+    EXPECT_NEAR(walls[d] + net[d], d == 2 ? -weight : 0.0, 1e-12 * weight);
   // At rest the walls carry the weight: the floor directly, the side walls through friction.
   EXPECT_NEAR(-walls[2] / weight, 1.0, 1e-4);
   EXPECT_LT(std::fabs(walls[0]) + std::fabs(walls[1]), 1e-4 * weight);
@@ -298,8 +302,7 @@ TYPED_TEST(WallTest, NoContactAcrossAWalledAxis) {
   // ... while x stays periodic: a particle leaving through x re-enters.
   h.z = {0.45, 5.0};
   h.vx = {-10.0, 0.0};
-  DemSystem<Exec, ContactModel<LinearNormal>> mixed(Particles<Exec>::from_host(h), box, model,
-                                                    prm);
+  DemSystem<Exec, ContactModel<LinearNormal>> mixed(Particles<Exec>::from_host(h), box, model, prm);
   mixed.step(200);
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mixed.particles().x);
   EXPECT_NEAR(x(0, 0), 1.0 - 2.0 + 6.0, 1e-9);

@@ -1,0 +1,139 @@
+// Output files are whole or absent: a write that runs out of space (a file-size limit stands
+// in for a full disk, which a test cannot make) fails with a clear error and leaves the
+// previous complete file under its name and no partial file behind; the plotting hook
+// hands paths to the interpreter as they are, so a hostile directory name runs nothing.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/output.hpp"
+
+using namespace granular;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const auto dir =
+      fs::temp_directory_path() / ("granular_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Limits the size of any file this process writes, for the scope's lifetime; writes past
+// the limit fail with EFBIG, as on a full disk (SIGXFSZ, which would kill us, is ignored).
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &saved_);
+    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim = saved_;
+    lim.rlim_cur = bytes;
+    setrlimit(RLIMIT_FSIZE, &lim);
+  }
+  ~FileSizeLimit() {
+    setrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, old_handler_);
+  }
+
+ private:
+  rlimit saved_{};
+  void (*old_handler_)(int) = nullptr;
+};
+
+std::string read_text(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST(OutputIntegrity, HdfFileThatCannotBeWrittenWholeLeavesThePreviousOneInPlace) {
+  const auto dir = fresh_dir("h5_full");
+  const std::string path = (dir / "results.h5").string();
+  {
+    H5Writer w(path);
+    w.write("/a", std::vector<double>{1, 2, 3});
+    w.commit();
+  }
+  bool failed = false;
+  {
+    FileSizeLimit limit(64 * 1024);
+    try {
+      H5Writer w(path);
+      w.write("/a", std::vector<double>(1 << 17, 7.0));  // 1 MiB: past the limit
+      w.commit();
+    } catch (const std::exception& e) {
+      failed = true;
+      EXPECT_NE(std::string(e.what()).find(dir.string()), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(failed) << "a write past the space left must fail";
+  EXPECT_EQ(H5Reader(path).reals("/a"), (std::vector<double>{1, 2, 3}));
+  EXPECT_FALSE(fs::exists(partial_name(path)));
+  fs::remove_all(dir);
+}
+
+TEST(OutputIntegrity, TextFileThatCannotBeWrittenWholeLeavesThePreviousOneInPlace) {
+  const auto dir = fresh_dir("text_full");
+  const std::string path = (dir / "summary.json").string();
+  write_text_file(path, "{\"complete\": true}\n");
+  bool failed = false;
+  {
+    FileSizeLimit limit(4096);
+    try {
+      write_text_file(path, std::string(1 << 16, 'x'));
+    } catch (const std::exception& e) {
+      failed = true;
+      EXPECT_NE(std::string(e.what()).find("summary.json"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(failed);
+  EXPECT_EQ(read_text(path), "{\"complete\": true}\n");
+  EXPECT_FALSE(fs::exists(partial_name(path)));
+  fs::remove_all(dir);
+}
+
+TEST(OutputIntegrity, OutputIntoAMissingDirectoryIsAnErrorNotACrash) {
+  const auto dir = fresh_dir("no_dir");
+  const std::string path = (dir / "absent" / "results.h5").string();
+  EXPECT_THROW(
+      {
+        H5Writer w(path);
+        w.commit();
+      },
+      std::exception);
+  EXPECT_THROW(write_text_file(path + ".json", "{}"), std::exception);
+  EXPECT_FALSE(fs::exists(path));
+  fs::remove_all(dir);
+}
+
+TEST(OutputIntegrity, PlotHookPassesHostilePathsVerbatimAndRunsNoShell) {
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3";
+  const auto dir = fresh_dir("plot_hook");
+  // A stand-in chart script that records the arguments it was given.
+  const auto scripts = dir / "plots";
+  fs::create_directories(scripts);
+  std::ofstream(scripts / "record_args.py")
+      << "import sys\nopen(sys.argv[2] + '/args.txt', 'w').write('\\n'.join(sys.argv[1:]))\n";
+  const std::string marker = (dir / "pwned").string();
+  const fs::path hostile = dir / ("out' ; touch '" + marker + "' ; echo '$(id)`id`\"");
+  fs::create_directories(hostile);
+  const std::string h5 = (hostile / "results.h5").string();
+  ::setenv("GRANULAR_PLOTS_DIR", scripts.c_str(), 1);
+  const bool ok = run_plot_script("record_args.py", h5, hostile.string());
+  ::unsetenv("GRANULAR_PLOTS_DIR");
+  EXPECT_TRUE(ok);
+  EXPECT_FALSE(fs::exists(marker)) << "a shell ran the path";
+  EXPECT_EQ(read_text(hostile / "args.txt"), h5 + "\n" + hostile.string());
+  fs::remove_all(dir);
+}
