@@ -11,6 +11,10 @@
 
 namespace granular {
 
+// Memory a DEM particle costs with its neighbour entries and contact histories, an upper
+// estimate used to refuse absurd particle counts before anything is allocated.
+constexpr double kDemBytesPerParticle = 4096;
+
 // a <- a(order(i)) row by row, for rank-1 and (n x 3) views.
 template <class ExecSpace, class V, class Order>
 void gather_rows(V& a, const Order& order, int n) {

@@ -1,6 +1,9 @@
 // Strict TOML scene reader (see scene_file.hpp).
 #include "core/scene_file.hpp"
 
+#include <cmath>
+#include <fstream>
+#include <limits>
 #include <sstream>
 
 #define TOML_EXCEPTIONS 1
@@ -60,6 +63,40 @@ void SceneFile::require(bool ok, const std::string& key, const std::string& what
   if (!ok) fail(key, what);
 }
 
+namespace {
+// MemAvailable of /proc/meminfo in bytes (what can be allocated without swapping); +inf
+// where it cannot be read, so that the check never refuses a run for want of a reading.
+double available_memory() {
+  std::ifstream f("/proc/meminfo");
+  std::string name;
+  double kb = 0;
+  std::string unit;
+  while (f >> name >> kb >> unit)
+    if (name == "MemAvailable:") return kb * 1024.0;
+  return std::numeric_limits<double>::infinity();
+}
+}  // namespace
+
+void SceneFile::require_memory(const std::string& key, double bytes) const {
+  const double avail = available_memory();
+  if (!(bytes <= avail)) {
+    std::ostringstream m;
+    m.precision(3);
+    m << "asks for a run that needs about " << bytes / 1e9 << " GB, more than the " << avail / 1e9
+      << " GB available: make it smaller";
+    fail(key, m.str());
+  }
+}
+
+int SceneFile::count(const std::string& key, long min, double bytes_each) const {
+  const long n = integer(key);
+  require(n >= min, key, "must be at least " + std::to_string(min));
+  require(n <= std::numeric_limits<int>::max(), key,
+          "must be at most " + std::to_string(std::numeric_limits<int>::max()));
+  require_memory(key, static_cast<double>(n) * bytes_each);
+  return static_cast<int>(n);
+}
+
 void SceneFile::note(const std::string& key, const std::string& value) const { used_[key] = value; }
 
 bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
@@ -72,17 +109,30 @@ std::vector<std::string> SceneFile::tables(const std::string& key) const {
   if (!t) fail(key, "must be a table of named tables ([" + key + ".<name>])");
   for (const auto& [k, node] : *t) {
     if (!node.as_table())
-      fail(key + "." + std::string(k.str()), "must be a table ([" + key + "." +
-                                                   std::string(k.str()) + "])");
+      fail(key + "." + std::string(k.str()),
+           "must be a table ([" + key + "." + std::string(k.str()) + "])");
     out.emplace_back(k.str());
   }
   return out;
+}
+
+double SceneFile::real_or_infinite(const std::string& key) const {
+  const toml::node* n = as_node(find(key));
+  if (!n) fail(key, "is missing (a number is required)");
+  if (auto v = n->value<double>()) {  // integers convert too
+    if (std::isnan(*v) || *v == -std::numeric_limits<double>::infinity())
+      fail(key, "must be a number or inf (nan and -inf are not)");
+    note(key, format_real(*v));
+    return *v;
+  }
+  fail(key, "must be a number");
 }
 
 double SceneFile::real(const std::string& key) const {
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a number is required)");
   if (auto v = n->value<double>()) {  // integers convert too
+    if (!std::isfinite(*v)) fail(key, "must be a finite number");
     note(key, format_real(*v));
     return *v;
   }
@@ -129,6 +179,7 @@ std::vector<double> SceneFile::reals(const std::string& key) const {
   for (const auto& e : *a) {
     auto v = e.value<double>();
     if (!v) fail(key, "must contain only numbers");
+    if (!std::isfinite(*v)) fail(key, "must contain only finite numbers");
     out.push_back(*v);
     text += (out.size() > 1 ? ", " : "") + format_real(*v);
   }

@@ -19,8 +19,13 @@ class SceneFile {
 
   const std::string& path() const { return path_; }
 
-  // Required values: a missing key or a value of the wrong type is an InputError.
+  // Required values: a missing key or a value of the wrong type is an InputError. Numbers
+  // must be finite (nan and inf are refused, naming the key): a non-finite input would only
+  // surface later as a crash or as silent nonsense deep inside a run.
   double real(const std::string& key) const;
+  // A number that may be +inf where infinity has a meaning (a rigid material's modulus);
+  // nan and -inf are still refused.
+  double real_or_infinite(const std::string& key) const;
   long integer(const std::string& key) const;
   std::string text(const std::string& key) const;
   bool flag(const std::string& key) const;
@@ -45,6 +50,12 @@ class SceneFile {
 
   // A range check with the same style of message.
   void require(bool ok, const std::string& key, const std::string& what) const;
+  // Refuses, before anything is allocated, a size set by `key` whose run would need more
+  // than the memory this machine has available (`bytes`: an estimate of that need).
+  void require_memory(const std::string& key, double bytes) const;
+  // A count (particles, beads, samples): an integer >= `min` that fits an int and whose run,
+  // at `bytes_each` per item, fits in the available memory; all checked before allocating.
+  int count(const std::string& key, long min, double bytes_each) const;
 
  private:
   struct Document;  // the parsed TOML tree; kept out of this header so device compilers

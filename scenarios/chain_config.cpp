@@ -6,14 +6,17 @@ namespace granular {
 
 ChainScene read_chain_scene(const SceneFile& scene) {
   ChainScene c;
-  c.spec.beads = static_cast<int>(scene.integer("chain.beads"));
+  c.spec.beads = scene.count("chain.beads", 2, 8.0 * 16);
   c.spec.boundary = parse_chain_boundary(scene.text("chain.boundary", "fixed"));
   c.spec.force = parse_chain_force(scene.text("chain.force", "hertz"));
   c.spec.rule = parse_stiffness_rule(scene.text("chain.stiffness_rule", "radius"));
   c.spec.target = parse_disorder_target(scene.text("disorder.on", "mass_and_stiffness"));
   c.spec.seed = static_cast<std::uint64_t>(scene.integer("disorder.seed", 1));
   c.xis = scene.reals("disorder.xi");
-  c.realizations = static_cast<int>(scene.integer("disorder.realizations"));
+  c.realizations = scene.count("disorder.realizations", 1, 0.0);
+  // Every realization holds every bead's state (about 16 doubles per bead).
+  scene.require_memory("disorder.realizations",
+                       16.0 * 8.0 * c.spec.beads * c.realizations * c.xis.size());
   c.spec.min_mass = scene.real("disorder.min_mass", 0.0);
   scene.require(c.spec.min_mass >= 0 && c.spec.min_mass < 1, "disorder.min_mass",
                 "must be in [0, 1) (the mean mass is 1)");

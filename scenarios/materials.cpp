@@ -19,7 +19,7 @@ MaterialSet MaterialSet::read(const SceneFile& s) {
     const std::string k = "materials." + name;
     Material mat;
     mat.name = name;
-    mat.young = s.real(k + ".young_modulus");
+    mat.young = s.real_or_infinite(k + ".young_modulus");
     mat.poisson = s.real(k + ".poisson");
     mat.density = s.real(k + ".density", 0.0);
     mat.friction = s.real(k + ".friction", 0.0);

@@ -4,6 +4,7 @@
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
+#include "core/scene_file.hpp"
 
 namespace granular {
 
@@ -19,5 +20,11 @@ struct GasSpec {
 // Random sequential insertion, largest particles first; zero total momentum.
 // Throws InputError when the requested volume fraction cannot be reached by insertion.
 HostParticles random_gas(const GasSpec& spec, PeriodicBox& box);
+
+// Checks a gas read from `scene` under the keys particles.{diameter_min, diameter_max,
+// density, initial_speed} and `phi_key`, before anything is allocated: sizes and density
+// positive, a size ratio the neighbour grid can hold (<= 100), a box the doubles can
+// measure, and a volume fraction in [1e-3, 0.5] (random insertion jams beyond).
+void check_gas(const SceneFile& scene, const GasSpec& gas, const std::string& phi_key);
 
 }  // namespace granular

@@ -93,6 +93,11 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
                 "must be between 2 and L/2 = " + std::to_string(L / 2));
   scene.require(u0 > 0 && u0 < 0.1, "wave.u0", "must be in (0, 0.1)");
   scene.require(samples >= 3, "time.samples", "must be at least 3");
+  // Ensemble-mean band energies (B bands x B tone experiments) at every sample, per xi.
+  scene.require_memory("time.samples",
+                       8.0 * (samples + 1) * B * B * static_cast<double>(cs.xis.size()));
+  scene.require_memory("validation.samples",
+                       8.0 * (check_samples + 1) * B * B * static_cast<double>(cs.xis.size()));
   auto window = [&](const std::vector<double>& w, const char* key) {
     scene.require(w.size() == 2 && w[0] >= 0 && w[1] > w[0] && w[1] <= samples, key,
                   "must be [first, last] sample indices within time.samples");

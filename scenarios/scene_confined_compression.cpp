@@ -47,7 +47,7 @@ Setup read_setup(const SceneFile& s) {
   s.require(size.size() == 3 && size[0] > 0 && size[1] > 0 && size[2] > 0, "box.size",
             "must hold three positive lengths");
   for (int d = 0; d < 3; ++d) c.size[d] = size[d];
-  c.fill.count = static_cast<int>(s.integer("fill.count"));
+  c.fill.count = s.count("fill.count", 1, kDemBytesPerParticle);
   c.fill.diameter_mean = s.real("fill.diameter_mean");
   c.fill.diameter_spread = s.real("fill.diameter_spread", 0.1);
   c.fill.seed = static_cast<std::uint64_t>(s.integer("fill.seed", 1));
@@ -66,7 +66,9 @@ Setup read_setup(const SceneFile& s) {
   c.experiment_force = s.real("compression.experiment_max_force", -1.0);
   c.experiment_strain = s.real("compression.experiment_strain", -1.0);
   c.models = read_soft_models(s, c.mats);
-  s.require(c.fill.count > 0, "fill.count", "must be positive");
+  s.require(c.fill.diameter_mean > 0, "fill.diameter_mean", "must be positive");
+  s.require(c.fill.diameter_spread >= 0 && c.fill.diameter_spread < 1, "fill.diameter_spread",
+            "must lie in [0, 1)");
   s.require(c.region_height >= c.size[2], "fill.region_height", "must reach the box height");
   s.require(c.gravity >= 0, "fill.gravity", "must not be negative");
   s.require(c.damping_time > 0, "fill.damping_time", "must be positive");

@@ -134,7 +134,10 @@ Setup read_setup(const SceneFile& scene) {
     return s;
   }
   GasSpec& g = s.gas;
-  g.count = static_cast<int>(scene.integer("particles.count", 0));
+  const long count = scene.integer("particles.count", 0);
+  scene.require(count >= 0 && count <= std::numeric_limits<int>::max(), "particles.count",
+                "must be in [2, 2^31)");
+  g.count = static_cast<int>(count);
   g.diameter_min = scene.real("particles.diameter_min");
   g.diameter_max = scene.real("particles.diameter_max");
   g.density = scene.real("particles.density");
@@ -156,6 +159,7 @@ Setup read_setup(const SceneFile& scene) {
                 "must be \"unloading\" (decompression from phi_max) or \"loading\"");
   s.loading_branch = branch == "loading";
   s.targets = scene.reals("preparation.targets");
+  check_gas(scene, g, "preparation.phi_gas");
   scene.require(s.phi0 > g.phi && s.phi_max > s.phi0 && s.phi_max < 1, "preparation.phi_max",
                 "must satisfy phi_gas < phi_0 < phi_max < 1");
   for (double t : s.targets)
@@ -170,7 +174,11 @@ Setup read_setup(const SceneFile& scene) {
   const std::vector<double> mus = scene.reals("preparation.mu", {});
   if (counts.empty()) counts.push_back(g.count);
   if (seeds.empty()) seeds.push_back(static_cast<double>(g.seed));
-  for (double c : counts) scene.require(c >= 2, "particles.count", "(or ensemble.counts) >= 2");
+  for (double c : counts) {
+    scene.require(c >= 2 && c <= std::numeric_limits<int>::max(), "particles.count",
+                  "(or ensemble.counts) must be in [2, 2^31)");
+    scene.require_memory("particles.count", c * kDemBytesPerParticle);
+  }
   for (double m : mus) scene.require(m >= 0, "preparation.mu", "must not be negative");
   if (!mus.empty())
     scene.require(s.contact.tangential == "coulomb", "preparation.mu",

@@ -77,7 +77,7 @@ struct Series {
 
 void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   GasSpec gas;
-  gas.count = static_cast<int>(scene.integer("particles.count"));
+  gas.count = scene.count("particles.count", 2, kDemBytesPerParticle);
   gas.diameter_min = scene.real("particles.diameter_min");
   gas.diameter_max = scene.real("particles.diameter_max");
   gas.density = scene.real("particles.density");
@@ -102,6 +102,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   // used to test that --resume reproduces an uninterrupted run.
   const long stop_after = scene.integer("run.stop_after", 0);
   scene.require(gas.count >= 2, "particles.count", "must be at least 2");
+  check_gas(scene, gas, "compression.phi_start");
   scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
                 "must lie between compression.phi_start and 1");
   scene.require(rate > 0, "compression.volumetric_strain_rate", "must be positive");

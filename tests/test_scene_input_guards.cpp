@@ -1,0 +1,99 @@
+// Bad values in shipped scene files are refused before anything runs or is allocated, with a
+// message naming the key and the file: non-finite numbers, sizes the doubles or the neighbour
+// grid cannot hold, particle counts beyond the machine's memory, meaningless densities and
+// volume fractions. Each mutant here once crashed, hung, or allocated until the machine ran
+// out of memory. `inf` stays legal where it means something (a rigid material).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "granular_config.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "tests/temp_paths.hpp"
+
+using namespace granular;
+
+namespace {
+
+std::string shipped(const std::string& name) {
+  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// The scene text with the first line `key = ...` given a new value.
+std::string mutate(const std::string& text, const std::string& key, const std::string& value) {
+  const std::regex line("(^|\n)" + key + " *=[^\n]*");
+  std::smatch m;
+  EXPECT_TRUE(std::regex_search(text, m, line)) << key;
+  return text.substr(0, m.position(0)) + m.str(1) + key + " = " + value +
+         text.substr(m.position(0) + m.length(0));
+}
+
+struct Mutant {
+  const char* key;       // the line to change (within its table)
+  const char* value;     // its new value
+  const char* full_key;  // what the message must name
+};
+
+void expect_refused(const std::string& text, const Mutant& m,
+                    void (*run)(const SceneFile&, const RunOptions&)) {
+  RunOptions opts;
+  opts.out_dir = granular::testing::unique_temp_path("granular_guard").string();
+  opts.progress = false, opts.charts = false;
+  try {
+    SceneFile scene = SceneFile::parse(mutate(text, m.key, m.value), "mutant.toml");
+    (void)scene.text("scene");
+    run(scene, opts);
+    ADD_FAILURE() << m.full_key << " = " << m.value << " must be refused";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(m.full_key), std::string::npos) << m.value << ": " << what;
+    EXPECT_NE(what.find("mutant.toml"), std::string::npos) << what;
+  }
+}
+
+void check_moduli(const SceneFile& s, const RunOptions&) { check_elastic_moduli(s); }
+
+}  // namespace
+
+TEST(SceneInputGuards, IsotropicCompressionRefusesNonFiniteAndAbsurdValues) {
+  const std::string text = shipped("isotropic_compression.toml");
+  const Mutant mutants[] = {
+      {"diameter_max", "nan", "particles.diameter_max"},
+      {"diameter_max", "inf", "particles.diameter_max"},
+      {"diameter_max", "1e308", "particles.diameter_max"},
+      {"count", "1000000000", "particles.count"},    // terabytes
+      {"count", "100000000000", "particles.count"},  // past an int
+      {"density", "-2000", "particles.density"},
+      {"phi_start", "1e-320", "compression.phi_start"},
+      {"dt", "nan", "run.dt"},
+  };
+  for (const Mutant& m : mutants) expect_refused(text, m, run_isotropic_compression);
+}
+
+TEST(SceneInputGuards, ElasticModuliRefusesNonFiniteAndAbsurdValues) {
+  const std::string text = shipped("moduli_linear_quick.toml");
+  const Mutant mutants[] = {
+      {"diameter_max", "1e308", "particles.diameter_max"},
+      {"diameter_max", "inf", "particles.diameter_max"},
+      {"phi_gas", "1e-320", "preparation.phi_gas"},
+      {"count", "10000000000", "particles.count"},
+  };
+  for (const Mutant& m : mutants) expect_refused(text, m, check_moduli);
+}
+
+TEST(SceneInputGuards, InfinityIsLegalOnlyWhereItMeansRigid) {
+  const std::string text = shipped("confined_compression_quick.toml");
+  // The shipped wall material is rigid (young_modulus = inf) and reads; nan there is refused,
+  // and inf where a finite number is needed is refused too.
+  expect_refused(text, {"young_modulus", "nan", "materials.hydrogel.young_modulus"},
+                 run_confined_compression);
+  expect_refused(text, {"wall_speed", "inf", "compression.wall_speed"}, run_confined_compression);
+  expect_refused(text, {"diameter_spread", "1.5", "fill.diameter_spread"},
+                 run_confined_compression);
+}
