@@ -70,6 +70,13 @@ class DemSystem {
     forces(0.0);  // initial forces: no spring increment for a step not taken
   }
 
+  // Move-only: the members are Kokkos Views, which copy as shared references, so a copy
+  // would silently step the same particles and histories as the original.
+  DemSystem(const DemSystem&) = delete;
+  DemSystem& operator=(const DemSystem&) = delete;
+  DemSystem(DemSystem&&) = default;
+  DemSystem& operator=(DemSystem&&) = default;
+
   // Advances n steps of velocity Verlet with the current strain rate.
   void step(long n) {
     const double dt = params_.dt;
@@ -242,6 +249,64 @@ class DemSystem {
     walls_.update(time_);
   }
   double particle_volume() const { return particle_volume_; }
+
+  // Exact restart: everything the next step reads, as it is now (particles in their current
+  // order with forces and torques, the neighbour list and its reference positions, contact
+  // and wall histories, box, strain rate, clock). Saving touches nothing, so a run that
+  // writes checkpoints is bitwise the run that does not; loading into a system made from the
+  // same particles, model, parameters and walls continues bitwise where the saved one was.
+  void save_restart(H5Writer& out, const std::string& g) const {
+    if (mc_.active())
+      throw InputError(
+          "exact restarts of multi-contact runs are not supported: their "
+          "previous-step contact forces are not saved");
+    for (auto [name, v] :
+         {std::pair{"x", p_.x}, {"v", p_.v}, {"w", p_.w}, {"f", p_.f}, {"torque", p_.torque}})
+      save_view(out, g + "/particles/" + name, v);
+    for (auto [name, v] :
+         {std::pair{"radius", p_.radius}, {"mass", p_.mass}, {"inertia", p_.inertia}})
+      save_view(out, g + "/particles/" + name, v);
+    save_view(out, g + "/particles/species", p_.species);
+    save_view(out, g + "/particles/id", p_.id);
+    nl_.save(out, g + "/neighbor_list");
+    history_.save(out, g + "/history");
+    save_view(out, g + "/walls/history", wall_history_);
+    save_view(out, g + "/walls/record", wall_record_);
+    std::vector<double> scalars = {time_, static_cast<double>(steps_), particle_volume_};
+    for (int d = 0; d < 3; ++d)
+      scalars.insert(scalars.end(),
+                     {box_.lo[d], box_.len[d], box_.periodic[d] ? 1.0 : 0.0, rate_[d]});
+    out.write(g + "/scalars", scalars);
+  }
+  void load_restart(const H5Reader& in, const std::string& g) {
+    const auto s = in.reals(g + "/scalars");
+    if (s.size() != 15) throw InputError("restart group " + g + " has malformed scalars");
+    Particles<ExecSpace> q = p_;
+    for (auto [name, v] :
+         {std::pair{"x", &q.x}, {"v", &q.v}, {"w", &q.w}, {"f", &q.f}, {"torque", &q.torque}})
+      load_view(in, g + "/particles/" + name, *v);
+    for (auto [name, v] :
+         {std::pair{"radius", &q.radius}, {"mass", &q.mass}, {"inertia", &q.inertia}})
+      load_view(in, g + "/particles/" + name, *v);
+    load_view(in, g + "/particles/species", q.species);
+    load_view(in, g + "/particles/id", q.id);
+    if (static_cast<int>(q.x.extent(0)) != p_.n)
+      throw InputError("restart group " + g + " holds another number of particles");
+    p_ = q;
+    nl_.load(in, g + "/neighbor_list");
+    history_.load(in, g + "/history");
+    load_view(in, g + "/walls/history", wall_history_);
+    load_view(in, g + "/walls/record", wall_record_);
+    time_ = s[0], steps_ = static_cast<long>(s[1]), particle_volume_ = s[2];
+    for (int d = 0; d < 3; ++d) {
+      box_.lo[d] = s[3 + 4 * d], box_.len[d] = s[4 + 4 * d];
+      box_.periodic[d] = s[5 + 4 * d] != 0.0, rate_[d] = s[6 + 4 * d];
+    }
+    walls_.update(time_);
+    constexpr int nb = Model::rotations ? 9 : 3;
+    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
+      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+  }
 
  private:
   static constexpr bool kRot = Model::rotations;

@@ -422,21 +422,25 @@ struct StageCheckpoints {
   std::string state(long k) const {
     return dir + "/" + name + "_stage" + std::to_string(k) + "_state.h5";
   }
+  // The system's exact state after stage k (DemSystem::save_restart).
+  std::string restart(long k) const {
+    return dir + "/" + name + "_stage" + std::to_string(k) + "_restart.h5";
+  }
   std::string part(long k) const { return name + "_stage" + std::to_string(k); }
   std::string pointer() const { return dir + "/" + name + "_stage"; }
   void remove(long k) const {
     if (k < 0) return;
     for (const std::string& f :
-         {state(k), dir + "/" + part(k) + ".h5", dir + "/" + part(k) + ".index"})
+         {state(k), restart(k), dir + "/" + part(k) + ".h5", dir + "/" + part(k) + ".index"})
       std::filesystem::remove(f);
   }
 };
 
 // Runs the protocol for one variant, calling `on_config` with each relaxed configuration.
 // The protocol is a list of stages (strains cut at every 0.02 in phi, relaxations, saved
-// configurations); after each one the state and the outputs so far are checkpointed and
-// the run continues from the checkpointed state itself, so a run resumed from any stage
-// repeats the uninterrupted one bit for bit.
+// configurations); after each one the exact state and the outputs so far are checkpointed
+// without touching the system, so the trajectory does not depend on where the stages fall,
+// and a run resumed from any stage repeats the uninterrupted one bit for bit.
 // Returns false when `stop` asked to end the run at a checkpoint.
 template <class Model>
 bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& out,
@@ -536,7 +540,11 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     for (long q = 0; q < first; ++q) done += stages[q].second ? 1 : 0;
     progress.update(done);
     if (first <= last) {
+      if (!std::filesystem::exists(ck.restart(k)))
+        throw InputError(ck.pointer() + ": the checkpoint predates exact restarts (no " +
+                         ck.restart(k) + "); run without --resume");
       sys.emplace(restart_system<System>(read_config(ck.state(k)), model, s.params));
+      sys->load_restart(H5Reader(ck.restart(k)), "/restart");
       std::cerr << "variant " << label << ": continuing after stage " << k + 1 << " of "
                 << stages.size() << "\n";
     } else {
@@ -562,13 +570,16 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     if (k + 1 == static_cast<long>(stages.size())) break;  // the variant's part follows
     const Measurements m = sys->measure();
     log_stage(k, m);
-    const ConfigState c = snapshot(*sys, host.density, m.pressure);
-    write_config(ck.state(k), c);
+    write_config(ck.state(k), snapshot(*sys, host.density, m.pressure));
+    {
+      H5Writer r(ck.restart(k));
+      sys->save_restart(r, "/restart");
+      r.commit();
+    }
     save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);
     write_text_file(ck.pointer(), std::to_string(k) + "\n");
     ck.remove(k - 1);
     if (stop()) return false;
-    sys.emplace(restart_system<System>(c, model, s.params));
   }
   for (long k = 0; k < static_cast<long>(stages.size()); ++k) ck.remove(k);
   ck.remove(resumed);

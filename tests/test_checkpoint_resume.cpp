@@ -77,3 +77,29 @@ TEST(CheckpointResume, InterruptedAndResumedRunEqualsUninterruptedRunBitwise) {
   EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "checkpoint.h5"));  // superseded
   std::filesystem::remove_all(root);
 }
+
+TEST(CheckpointResume, CheckpointIntervalLeavesTheTrajectoryBitwiseUnchanged) {
+  // Writing a checkpoint must not touch the state (no neighbour rebuild, no force refresh):
+  // runs that checkpoint every 2000, 700 or 333 steps, or never within the run, end alike.
+  const auto root = granular::testing::unique_temp_path("granular_checkpoint_interval");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  std::vector<std::vector<double>> finals;
+  std::vector<double> builds;
+  for (const char* every : {"2000", "700", "333", "100000000"}) {
+    std::string text = kScene;
+    const std::string from = "checkpoint_every = 2000";
+    text.replace(text.find(from), from.size(), std::string("checkpoint_every = ") + every);
+    opts.out_dir = (root / every).string();
+    run_isotropic_compression(scene(text, std::string("every_") + every + ".toml"), opts);
+    finals.push_back(final_positions(opts.out_dir));
+    builds.push_back(
+        H5Reader(opts.out_dir + "/results.h5").reals("/series/neighbor_builds").back());
+  }
+  for (size_t k = 1; k < finals.size(); ++k) {
+    EXPECT_EQ(finals[k], finals[0]) << k;
+    EXPECT_EQ(builds[k], builds[0]) << k;
+  }
+  std::filesystem::remove_all(root);
+}
