@@ -2,6 +2,7 @@
 #include "core/lammps_data.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -21,9 +22,15 @@ std::string strip_comment(const std::string& line) {
   const auto e = s.find_last_not_of(" \t\r");
   return s.substr(b, e - b + 1);
 }
+std::string number(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
 }  // namespace
 
-LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale) {
+LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale,
+                            double mass_scale) {
   std::ifstream in(path);
   if (!in) throw InputError("cannot open LAMMPS data file " + path);
   LammpsData out;
@@ -51,7 +58,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
       if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
         ss >> natoms;
       } else if (s.find("atom types") != std::string::npos) {
-        ss >> out.atom_types;
+        if (!(ss >> out.atom_types) || out.atom_types < 1)
+          fail("'atom types' needs a positive count");
       } else if ((ss >> a >> b >> w1 >> w2) && (w1 == "xlo" || w1 == "ylo" || w1 == "zlo")) {
         const int d = w1[0] - 'x';
         out.lo[d] = a * length_scale;
@@ -64,19 +72,30 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     long id;
     if (!(ss >> id)) fail("expected an atom id");
     while (ss >> x) v.push_back(x);
+    if (!ss.eof()) fail("not a number: '" + s + "'");
     if (section == "Atoms") {
       if (v.size() < 6)
         fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
-      atoms[id] = v;
+      const int ntypes = std::min(out.atom_types, kLammpsMaxTypes);
+      if (v[0] != std::floor(v[0]) || v[0] < 1 || v[0] > ntypes)
+        fail("atom type " + number(v[0]) + " outside 1.." + std::to_string(ntypes) +
+             " (atom types in the header, at most " + std::to_string(kLammpsMaxTypes) +
+             " species)");
+      if (!(v[1] > 0) || !(v[2] > 0)) fail("diameter and density must be positive");
+      if (!atoms.emplace(id, v).second) fail("atom id " + std::to_string(id) + " appears twice");
     } else if (section == "Velocities") {
       if (v.size() < 3) fail("Velocities line needs: id vx vy vz [wx wy wz]");
-      vels[id] = v;
+      if (!vels.emplace(id, v).second) fail("velocity of atom " + std::to_string(id) + " twice");
     }
   }
   if (natoms < 0) throw InputError(path + ": header lacks the 'N atoms' line");
   if (static_cast<long>(atoms.size()) != natoms)
     throw InputError(path + ": header announces " + std::to_string(natoms) + " atoms, Atoms has " +
                      std::to_string(atoms.size()));
+  for (const auto& [id, v] : vels)
+    if (atoms.count(id) == 0)
+      throw InputError(path + ": Velocities names atom " + std::to_string(id) +
+                       ", which is not in Atoms");
   HostParticles& h = out.particles;
   h.resize(static_cast<int>(natoms));
   int i = 0;
@@ -84,7 +103,7 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
   for (const auto& [id, a] : atoms) {  // std::map: ascending id
     h.species[i] = static_cast<int>(a[0]) - 1;
     h.radius[i] = 0.5 * a[1] * length_scale;
-    h.density[i] = a[2] * (1.0 / (length_scale * length_scale * length_scale)) * 1e9;
+    h.density[i] = a[2] * (mass_scale / (length_scale * length_scale * length_scale));
     h.x[i] = a[3] * length_scale, h.y[i] = a[4] * length_scale, h.z[i] = a[5] * length_scale;
     auto it = vels.find(id);
     if (it != vels.end()) {

@@ -2,12 +2,20 @@
 // layout): `Atoms` lines `id type diameter density x y z [ix iy iz]`, optional
 // `Velocities` lines `id vx vy vz wx wy wz`. Converts SI units to the engine's
 // (mm, us, ug), sorts particles by id and unwraps nothing: positions are wrapped later.
+// Atom type t becomes species t - 1, which must exist in the pair tables: 1 <= t <=
+// min(atom types, kLammpsMaxTypes). Every malformed input is an InputError naming the file.
+// Angular velocities (the last three Velocities columns) are read but not stored: the
+// host description carries no spin.
 #pragma once
 #include <string>
 
 #include "core/host_particles.hpp"
 
 namespace granular {
+
+// The number of species the contact models' pair tables hold (kMaxSpecies in
+// kernels/contact_state.hpp, which needs Kokkos; a test asserts that they agree).
+constexpr int kLammpsMaxTypes = 4;
 
 struct LammpsData {
   HostParticles particles;
@@ -16,8 +24,10 @@ struct LammpsData {
 };
 
 // `length_scale` multiplies lengths (1e3: metres to millimetres), `time_scale` times
-// (1e6: seconds to microseconds); densities in kg/m^3 equal ug/mm^3 and need no factor.
+// (1e6: seconds to microseconds), `mass_scale` masses (1e9: kilograms to micrograms);
+// densities are multiplied by mass_scale / length_scale^3, which is 1 for the defaults
+// (kg/m^3 equal ug/mm^3), and all three set to 1 read the file unchanged.
 LammpsData read_lammps_data(const std::string& path, double length_scale = 1e3,
-                            double time_scale = 1e6);
+                            double time_scale = 1e6, double mass_scale = 1e9);
 
 }  // namespace granular

@@ -84,7 +84,9 @@ KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], doubl
   const double f_sq = dot3(f, f);
   const double afn = fn < 0.0 ? -fn : fn;
   const double limit = mu_s * afn;
-  if (f_sq <= limit * limit) return false;  // no square root while sticking; mu_s = inf sticks
+  // No square root while sticking. Written as !(f_sq > ...) so that mu_s = infinity sticks
+  // also at f_n = 0, where the limit inf * 0 is NaN (it used to slide there, with a NaN force).
+  if (!(f_sq > limit * limit)) return false;
   const double fmag = Kokkos::Experimental::sqrt(f_sq);
   const double slide = mu_d * afn;
   const double scale = fmag > 0.0 ? slide / fmag : 0.0;
