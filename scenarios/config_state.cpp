@@ -4,6 +4,8 @@
 //   /contacts/{pair_i, pair_j} and /contacts/history (M x width), attribute history_width.
 #include "scenarios/config_state.hpp"
 
+#include "kernels/contact_state.hpp"
+
 namespace granular {
 
 namespace {
@@ -15,7 +17,11 @@ std::vector<double> interleave(const std::vector<double>& a, const std::vector<d
   return out;
 }
 void split(const std::vector<double>& in, std::vector<double>& a, std::vector<double>& b,
-           std::vector<double>& c) {
+           std::vector<double>& c, const std::string& path, const char* what) {
+  if (in.size() != 3 * a.size())  // checked before reading: a short array must not be overrun
+    throw InputError("configuration file " + path + ": " + what + " has " +
+                     std::to_string(in.size()) + " values for " + std::to_string(a.size()) +
+                     " particles");
   for (size_t i = 0; i < a.size(); ++i)
     a[i] = in[3 * i], b[i] = in[3 * i + 1], c[i] = in[3 * i + 2];
 }
@@ -55,8 +61,8 @@ ConfigState read_config(const std::string& path) {
   HostParticles& p = c.particles;
   p.resize(n);
   p.radius = radius;
-  split(in.reals("/state/position"), p.x, p.y, p.z);
-  split(in.reals("/state/velocity"), p.vx, p.vy, p.vz);
+  split(in.reals("/state/position"), p.x, p.y, p.z, path, "position");
+  split(in.reals("/state/velocity"), p.vx, p.vy, p.vz, path, "velocity");
   p.density = in.reals("/state/density");
   p.species = in.ints("/state/species");
   c.w = in.reals("/state/angular_velocity");
@@ -77,7 +83,16 @@ ConfigState read_config(const std::string& path) {
     if (c.pair_j.size() != c.pair_i.size() ||
         c.history.size() != c.pair_i.size() * static_cast<size_t>(c.history_width))
       throw InputError("configuration file " + path + " has inconsistent contact history");
+    for (size_t r = 0; r < c.pair_i.size(); ++r)
+      if (c.pair_i[r] < 0 || c.pair_i[r] >= n || c.pair_j[r] < 0 || c.pair_j[r] >= n)
+        throw InputError("configuration file " + path + ": contact " + std::to_string(r) +
+                         " names a particle that does not exist");
   }
+  for (int i = 0; i < n; ++i)
+    if (p.species[i] < 0 || p.species[i] >= kMaxSpecies)
+      throw InputError("configuration file " + path + ": particle " + std::to_string(i) +
+                       " has species " + std::to_string(p.species[i]) + ", outside [0, " +
+                       std::to_string(kMaxSpecies) + ")");
   return c;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/box.hpp"
+#include "core/error.hpp"
 #include "core/output.hpp"
 #include "core/particles.hpp"
 
@@ -49,6 +50,10 @@ inline HostParticles read_state(const H5Reader& in, const std::string& group, Pe
   density = in.attribute(group, "density");
   HostParticles h;
   const int n = static_cast<int>(rad.size());
+  if (pos.size() != 3 * rad.size() || vel.size() != 3 * rad.size() || lo.size() != 3 ||
+      len.size() != 3)
+    throw InputError("state group " + group + ": array sizes do not match " + std::to_string(n) +
+                     " particles and a box");
   h.resize(n);
   for (int i = 0; i < n; ++i) {
     h.x[i] = pos[3 * i], h.y[i] = pos[3 * i + 1], h.z[i] = pos[3 * i + 2];
