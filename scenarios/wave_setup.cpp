@@ -62,6 +62,13 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.tolerance = s.real("preparation.tolerance", 0.02);
   w.relax_time = s.real("preparation.relax_time");
   w.max_time = s.real("preparation.max_time");
+  w.gas_end_phi = s.real("preparation.gas_end_phi", 0.55);
+  w.max_push = s.real("preparation.max_push", 0.003);
+  w.final_relax_time = s.real("preparation.final_relax_time");
+  s.require(w.final_relax_time > 0, "preparation.final_relax_time", "must be positive");
+  s.require(w.gas_end_phi > w.gas_phi && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
+            "must lie between column.gas_volume_fraction and 0.64");
+  s.require(w.max_push > 0 && w.max_push < 0.05, "preparation.max_push", "must lie in (0, 0.05)");
   s.require(w.prep_friction >= 0, "preparation.friction", "must not be negative");
   s.require(w.wall_speed > 0, "preparation.wall_speed", "must be positive");
   s.require(w.damping_time > 0, "preparation.damping_time", "must be positive");

@@ -8,7 +8,9 @@
 //                 gas_volume_fraction = 0.35   seed = 1
 //   [preparation] pressures = [0.05, 0.2, 0.5] (MPa, wall stress sigma_xx, loading branch)
 //                 friction = 0   wall_speed = 0.01 (mm/us, servo's largest)   damping_time
-//                 tolerance = 0.02   relax_time   max_time
+//                 tolerance = 0.02   relax_time   max_time   gas_end_phi = 0.55
+//                 max_push = 0.003 (largest servo step, fraction of the gap)
+//                 final_relax_time (us, the state must stay within tolerance over it)
 //   [pulse]       shape = "raised_cosine" | "ricker"   duration (us)   velocity (mm/us)
 //                 amplitude_factors = [1, 2]   pre_time (us, quiet record before the pulse)
 //                 record_time (us)   sample_every (steps)
@@ -35,7 +37,8 @@ struct WaveSetup {
   long seed = 1;
   std::vector<double> pressures;
   double prep_friction = 0, wall_speed = 0.01, damping_time = 0, tolerance = 0.02;
-  double relax_time = 0, max_time = 0;
+  double relax_time = 0, max_time = 0, gas_end_phi = 0.55, max_push = 0.003;
+  double final_relax_time = 0;
   std::string shape = "raised_cosine";
   double duration = 0, velocity = 0, pre_time = 0, record_time = 0;
   std::vector<double> amplitude_factors;
