@@ -29,7 +29,12 @@ with h5py.File(h5, "r") as f:
                              color=line.get_color())
         sp = r["spectrum"]
         e = sp["energy"][:]
-        axes[2].semilogy(sp["frequency"][:] * 1e3, e / e.max(), lw=1, label=lab)
+        axes[2].semilogy(sp["frequency"][:] * 1e3, e / e.max(), lw=1, label=lab,
+                         color=line.get_color())
+        sm = g["receiver_mirrored"]
+        e = sm["energy"][:]
+        axes[2].semilogy(sm["frequency"][:] * 1e3, e / e.max(), lw=0.8, ls="--",
+                         color=line.get_color())
     s0 = f["pressure_0/source"]
     axes[0].plot(s0["time"][:], s0["amplitude"][:] / np.max(s0["amplitude"][:]), "k--", lw=0.8,
                  label="source velocity")
@@ -39,7 +44,7 @@ with h5py.File(h5, "r") as f:
     axes[1].set_xlabel("time (us)")
     axes[1].set_ylabel("slab velocity (normalised, offset per slab)")
     axes[2].set_xlabel("frequency (kHz)")
-    axes[2].set_ylabel("|A(f)|^2 / max (receiver)")
+    axes[2].set_ylabel("|A(f)|^2 / max (receiver; dashed: mirrored)")
     axes[2].set_xlim(0, 60)
     axes[2].set_ylim(1e-6, 2)
     save(fig, outdir, "signals.png")
