@@ -426,7 +426,8 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
           num = std::max(num, std::abs(x - y)), den = std::max(den, std::abs(y));
         }
         e["normalized_signal_max_difference"] = num / den;
-        e["first_peak_time_difference"] = po.first_peak - pout.first_peak;
+        const double dtp = po.first_peak - pout.first_peak;
+        e["first_peak_time_difference"] = std::isfinite(dtp) ? Json(dtp) : Json();
       }
       amps.push(e);
     }
@@ -503,8 +504,9 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     }
     row["dt_check"] = dts;
     const double m_wave = p.rho_bulk * vp_peak * vp_peak;
-    row["M_wave_first_peak"] = m_wave;
-    row["M_wave_over_M_probe"] = m_wave / m_probe;
+    // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
+    row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
+    row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
     std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
               << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
               << "\n";
