@@ -120,13 +120,15 @@ Spectrum event_spectrum(const Trace& tr, const Picks& p, const SpectrumOptions& 
     i0 = lobe_start(tr, base, p.arrival_index);
     i1 = lobe_end(tr, base, p.arrival_index);
     if (o.window == EventWindow::Mirrored) {
-      // The first extremum of the first lobe (peak or trough, whichever sign it has).
-      int ie = i0;
-      for (int i = i0; i <= i1; ++i)
-        if (std::abs(tr.a[i] - base) > std::abs(tr.a[ie] - base))
-          ie = i;
-        else if (i > ie + 1 && std::abs(tr.a[i] - base) < std::abs(tr.a[ie] - base))
-          break;
+      // Up to the picked first peak (trough) of a positive (negative) lobe: a local scan
+      // for the extremum would stop at the first wiggle of a noisy rise.
+      const bool positive = tr.a[p.arrival_index] - base > 0;
+      int ie = positive ? p.peak_index : p.trough_index;
+      if (ie < i0 || ie > i1) {  // no picked extremum inside the lobe: its largest sample
+        ie = i0;
+        for (int i = i0; i <= i1; ++i)
+          if (std::abs(tr.a[i] - base) > std::abs(tr.a[ie] - base)) ie = i;
+      }
       i1 = ie;
     }
   }
