@@ -27,6 +27,13 @@ const std::vector<SceneEntry>& scene_registry() {
       {"continuum_fit",
        "hypoelastic continuum law fitted to the moduli studies, checked on DEM paths",
        run_continuum_fit},
+      // signals and waves
+      {"signal_analysis",
+       "travel-time pickers, first-event spectra and spectral-ratio Q of recorded traces",
+       run_signal_analysis},
+      {"wave_transmission",
+       "virtual transducers: a pulse through a confined packing, V_p and M against probing",
+       run_wave_transmission},
       // chain scenes
       {"chain_impulse",
        "impulse on disordered granular chains: energy profile, spreading, localization",

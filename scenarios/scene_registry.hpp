@@ -42,6 +42,9 @@ void check_elastic_moduli(const SceneFile&);
 void run_continuum_fit(const SceneFile&, const RunOptions&);
 // Reads and checks every key of a continuum_fit scene without running it.
 void check_continuum_fit(const SceneFile&);
+// signals and waves
+void run_signal_analysis(const SceneFile&, const RunOptions&);
+void run_wave_transmission(const SceneFile&, const RunOptions&);
 // chain scenes
 void run_chain_impulse(const SceneFile&, const RunOptions&);
 void run_chain_master_equation(const SceneFile&, const RunOptions&);
