@@ -7,9 +7,11 @@
 
 #include "core/output.hpp"
 #include "scenarios/scene_registry.hpp"
-#include "tests/temp_paths.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
 namespace {
 const char* kScene = R"(

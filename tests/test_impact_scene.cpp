@@ -13,23 +13,13 @@
 #include "core/output.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
-#include "tests/temp_paths.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
-namespace {
-std::string shipped(const std::string& name) {
-  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-std::string temp_dir(const std::string& name) {
-  const auto dir = granular::testing::unique_temp_path("granular_test_" + name);
-  std::filesystem::remove_all(dir);
-  return dir.string();
-}
-}  // namespace
+namespace {}  // namespace
 
 TEST(ImpactScene, ShippedGlassOnSteelReboundsAsItsClosedForms) {
   RunOptions opts;
@@ -67,7 +57,7 @@ TEST(ImpactScene, ShippedGlassOnSteelReboundsAsItsClosedForms) {
 }
 
 TEST(ImpactScene, UnknownMaterialNamesKeyAndFile) {
-  std::string text = shipped("impact_glass_wall.toml");
+  std::string text = shipped_scene("impact_glass_wall.toml");
   const std::string good = "target_material = \"steel\"";
   const auto at = text.find(good);
   ASSERT_NE(at, std::string::npos);

@@ -9,9 +9,11 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/packing.hpp"
-#include "tests/temp_paths.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 using Exec = Kokkos::DefaultExecutionSpace;
 
 namespace {

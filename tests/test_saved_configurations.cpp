@@ -15,9 +15,11 @@
 #include "scenarios/moduli_outputs.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
-#include "tests/temp_paths.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
 namespace {
 using Exec = Kokkos::DefaultExecutionSpace;

@@ -12,18 +12,13 @@
 #include "core/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
-#include "tests/temp_paths.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
 namespace {
-
-std::string shipped(const std::string& name) {
-  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 // The scene text with the first line `key = ...` given a new value.
 std::string mutate(const std::string& text, const std::string& key, const std::string& value) {
@@ -62,7 +57,7 @@ void check_moduli(const SceneFile& s, const RunOptions&) { check_elastic_moduli(
 }  // namespace
 
 TEST(SceneInputGuards, IsotropicCompressionRefusesNonFiniteAndAbsurdValues) {
-  const std::string text = shipped("isotropic_compression.toml");
+  const std::string text = shipped_scene("isotropic_compression.toml");
   const Mutant mutants[] = {
       {"diameter_max", "nan", "particles.diameter_max"},
       {"diameter_max", "inf", "particles.diameter_max"},
@@ -77,7 +72,7 @@ TEST(SceneInputGuards, IsotropicCompressionRefusesNonFiniteAndAbsurdValues) {
 }
 
 TEST(SceneInputGuards, ElasticModuliRefusesNonFiniteAndAbsurdValues) {
-  const std::string text = shipped("moduli_linear_quick.toml");
+  const std::string text = shipped_scene("moduli_linear_quick.toml");
   const Mutant mutants[] = {
       {"diameter_max", "1e308", "particles.diameter_max"},
       {"diameter_max", "inf", "particles.diameter_max"},
@@ -88,7 +83,7 @@ TEST(SceneInputGuards, ElasticModuliRefusesNonFiniteAndAbsurdValues) {
 }
 
 TEST(SceneInputGuards, InfinityIsLegalOnlyWhereItMeansRigid) {
-  const std::string text = shipped("confined_compression_quick.toml");
+  const std::string text = shipped_scene("confined_compression_quick.toml");
   // The shipped wall material is rigid (young_modulus = inf) and reads; nan there is refused,
   // and inf where a finite number is needed is refused too.
   expect_refused(text, {"young_modulus", "nan", "materials.hydrogel.young_modulus"},

@@ -16,24 +16,13 @@
 #include "core/output.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
 namespace {
-
-std::string shipped(const std::string& name) {
-  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-std::string temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("granular_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  return dir.string();
-}
 
 void replace(std::string& text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
@@ -43,7 +32,7 @@ void replace(std::string& text, const std::string& from, const std::string& to) 
 
 // The shipped three/five-sphere scene sampled every step.
 std::string classical_collision_scene() {
-  std::string text = shipped("soft_collision.toml");
+  std::string text = shipped_scene("soft_collision.toml");
   replace(text, "sample_every = 5", "sample_every = 1");
   return text;
 }
@@ -110,7 +99,7 @@ TEST(SoftCollisionScene, DampedThreeInARowKeepsTheEnergyOfHalfTheReducedMassDamp
 }
 
 TEST(ConfinedCompressionScene, ErrorsNameTheKeyAndTheFile) {
-  const std::string base = shipped("confined_compression_quick.toml");
+  const std::string base = shipped_scene("confined_compression_quick.toml");
   const std::pair<std::string, std::string> mutants[] = {
       {"wall_speed = 1e-4", "wal_speed = 1e-4"},  // misspelt: wall_speed is missing
       {"max_time = 3e6", "max_time = 1e4"},       // shorter than the fall

@@ -12,22 +12,13 @@
 #include "core/output.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::shipped_scene;
+using granular::testing::temp_dir;
 
 namespace {
-std::string shipped(const std::string& name) {
-  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-std::string temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("granular_test_" + name + "_" + std::to_string(getpid()));
-  std::filesystem::remove_all(dir);
-  return dir.string();
-}
 void replace(std::string& text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
   ASSERT_NE(at, std::string::npos) << from;
@@ -49,7 +40,7 @@ double json_number(const std::string& json, const std::string& key, const std::s
 }  // namespace
 
 TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
-  std::string text = shipped("signal_analysis_traces.toml");
+  std::string text = shipped_scene("signal_analysis_traces.toml");
   const std::string src = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/";
   replace(text, "\"scenarios/signal_example_trace1.csv\"",
           "\"" + src + "signal_example_trace1.csv\"");
@@ -70,7 +61,7 @@ TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
 }
 
 TEST(SignalAnalysisScene, UnknownWindowNamesKeyAndFile) {
-  std::string text = shipped("signal_analysis_synthetic.toml");
+  std::string text = shipped_scene("signal_analysis_synthetic.toml");
   replace(text, "window = \"span\"", "window = \"hann\"");
   RunOptions opts;
   opts.out_dir = temp_dir("signal_bad");
@@ -94,7 +85,7 @@ TEST(WaveTransmissionScene, BadVolumeFractionsAndMaterialsNameKeyAndFile) {
   };
   const char* keys[] = {"mixture.volume_fractions", "mixture.materials", "contact.pair_rule"};
   for (int k = 0; k < 3; ++k) {
-    std::string text = shipped("wave_transmission_quick.toml");
+    std::string text = shipped_scene("wave_transmission_quick.toml");
     replace(text, cases[k].first, cases[k].second);
     RunOptions opts;
     opts.out_dir = temp_dir("wave_bad");
