@@ -19,21 +19,16 @@
 #include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::replace_once;
 using granular::testing::shipped_scene;
 using granular::testing::temp_dir;
 
 namespace {
 
-void replace(std::string& text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from;
-  text.replace(at, from.size(), to);
-}
-
 // The shipped three/five-sphere scene sampled every step.
 std::string classical_collision_scene() {
   std::string text = shipped_scene("soft_collision.toml");
-  replace(text, "sample_every = 5", "sample_every = 1");
+  replace_once(text, "sample_every = 5", "sample_every = 1");
   return text;
 }
 
@@ -58,7 +53,7 @@ double max_of(const std::vector<double>& v) { return *std::max_element(v.begin()
 
 TEST(SoftCollisionScene, ElasticThreeInARowIsHertzImpactOnAFixedSphere) {
   std::string text = classical_collision_scene();
-  replace(text, "restitution = 0.95", "restitution = 1.0");
+  replace_once(text, "restitution = 0.95", "restitution = 1.0");
   RunOptions opts;
   opts.out_dir = temp_dir("soft_elastic");
   opts.progress = false, opts.charts = false;
@@ -109,7 +104,7 @@ TEST(ConfinedCompressionScene, ErrorsNameTheKeyAndTheFile) {
                         "compression.particle_material"};
   for (size_t k = 0; k < std::size(mutants); ++k) {
     std::string text = base;
-    replace(text, mutants[k].first, mutants[k].second);
+    replace_once(text, mutants[k].first, mutants[k].second);
     RunOptions opts;
     opts.out_dir = temp_dir("confined_bad");
     opts.progress = false, opts.charts = false;

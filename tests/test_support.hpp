@@ -2,6 +2,7 @@
 // runs every test twice (1 and 2 threads), possibly at the same time under -j, so each
 // process gets its own scratch names, suffixed with its pid.
 #pragma once
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -31,6 +32,14 @@ inline std::string shipped_scene(const std::string& name) {
   std::stringstream ss;
   ss << f.rdbuf();
   return ss.str();
+}
+
+// Replaces the first occurrence of `from` in `text` (a mutated scene file); a test whose
+// anchor is gone fails instead of silently running the unmutated scene.
+inline void replace_once(std::string& text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
 }
 
 }  // namespace granular::testing

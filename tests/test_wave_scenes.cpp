@@ -15,15 +15,11 @@
 #include "tests/test_support.hpp"
 
 using namespace granular;
+using granular::testing::replace_once;
 using granular::testing::shipped_scene;
 using granular::testing::temp_dir;
 
 namespace {
-void replace(std::string& text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from;
-  text.replace(at, from.size(), to);
-}
 std::string slurp(const std::string& path) {
   std::ifstream f(path);
   std::stringstream ss;
@@ -42,10 +38,10 @@ double json_number(const std::string& json, const std::string& key, const std::s
 TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
   std::string text = shipped_scene("signal_analysis_traces.toml");
   const std::string src = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/";
-  replace(text, "\"scenarios/signal_example_trace1.csv\"",
-          "\"" + src + "signal_example_trace1.csv\"");
-  replace(text, "\"scenarios/signal_example_trace2.csv\"",
-          "\"" + src + "signal_example_trace2.csv\"");
+  replace_once(text, "\"scenarios/signal_example_trace1.csv\"",
+               "\"" + src + "signal_example_trace1.csv\"");
+  replace_once(text, "\"scenarios/signal_example_trace2.csv\"",
+               "\"" + src + "signal_example_trace2.csv\"");
   RunOptions opts;
   opts.out_dir = temp_dir("signal_traces");
   opts.progress = false, opts.charts = false;
@@ -62,7 +58,7 @@ TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
 
 TEST(SignalAnalysisScene, UnknownWindowNamesKeyAndFile) {
   std::string text = shipped_scene("signal_analysis_synthetic.toml");
-  replace(text, "window = \"span\"", "window = \"hann\"");
+  replace_once(text, "window = \"span\"", "window = \"hann\"");
   RunOptions opts;
   opts.out_dir = temp_dir("signal_bad");
   opts.progress = false, opts.charts = false;
@@ -86,7 +82,7 @@ TEST(WaveTransmissionScene, BadVolumeFractionsAndMaterialsNameKeyAndFile) {
   const char* keys[] = {"mixture.volume_fractions", "mixture.materials", "contact.pair_rule"};
   for (int k = 0; k < 3; ++k) {
     std::string text = shipped_scene("wave_transmission_quick.toml");
-    replace(text, cases[k].first, cases[k].second);
+    replace_once(text, cases[k].first, cases[k].second);
     RunOptions opts;
     opts.out_dir = temp_dir("wave_bad");
     opts.progress = false, opts.charts = false;
