@@ -141,14 +141,14 @@ TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
   using System = DemSystem<Kokkos::DefaultExecutionSpace, MixtureModel>;
   System sys(Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, params);
   strain_to_phi(sys, 0.55, -1e-3 / 3, 500, nullptr);
-  compress_to_pressure(sys, 0.1, 1e-4, 20, 0.74);
+  compress_to_pressure(sys, 0.5, 1e-4, 20, 0.74);
   double mass = 0;
   for (int i = 0; i < h.size(); ++i)
     mass += h.density[i] * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
   ServoSettings s;
-  s.tolerance = 0.02, s.ekin_ratio = 1e-5;
+  s.tolerance = 0.02, s.ekin_ratio = 1e-3, s.max_cycles = 400;
   double phi_before = 0;
-  for (double target : {0.1, 0.5}) {
+  for (double target : {0.5, 2.0}) {
     const ServoResult r = servo_to_pressure(sys, target, mass / sys.box().volume(), s);
     EXPECT_TRUE(r.converged) << target << " MPa: P = " << r.m.pressure << " after " << r.cycles;
     const Measurements now = sys.measure();
@@ -161,8 +161,9 @@ TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
 }
 
 TEST(MixtureModuliScene, ShippedSceneFilesRead) {
-  for (const char* name : {"mixture_moduli.toml", "mixture_moduli_quick.toml"})
-    EXPECT_NO_THROW(check_mixture_moduli(
-        SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name)))
-        << name;
+  for (const char* name : {"mixture_moduli.toml", "mixture_moduli_quick.toml"}) {
+    const SceneFile s = SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+    EXPECT_EQ(s.text("scene"), "mixture_moduli");
+    EXPECT_NO_THROW(check_mixture_moduli(s)) << name;
+  }
 }

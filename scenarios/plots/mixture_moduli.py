@@ -36,10 +36,12 @@ for nu in fractions:
         ax.plot(pp, A * pp ** n, "-", color=colour[nu], lw=0.8)
         label += f": n = {n:.3f}" + (f" ± {se:.3f}" if np.isfinite(se) else "")
     ax.loglog(P, M, "o", color=colour[nu], label=label)
-pp = np.geomspace(t["pressure"][ok].min(), t["pressure"][ok].max(), 10) if ok.any() else []
-if len(pp):
-    ref = t["M"][ok][np.argmax(t["pressure"][ok])] if ok.any() else 1
-    ax.loglog(pp, ref * (pp / pp[-1]) ** (1 / 3), "k:", lw=1, label="∝ P^(1/3)")
+first = ok & (t["soft_fraction"] == fractions[0]) if fractions else ok
+if first.any():  # the Hertzian slope through the stiffest mixture's highest-pressure point
+    pp = np.geomspace(t["pressure"][ok].min(), t["pressure"][ok].max(), 10)
+    k = np.argmax(t["pressure"][first])
+    ref, p_ref = t["M"][first][k], t["pressure"][first][k]
+    ax.loglog(pp, ref * (pp / p_ref) ** (1 / 3), "k:", lw=1, label="∝ P^(1/3)")
 ax.set_xlabel("pressure P (MPa)")
 ax.set_ylabel("P-wave modulus M (MPa, uniaxial probe)")
 ax.legend(fontsize=7)
