@@ -67,7 +67,6 @@ struct Setup {
   std::vector<double> fractions;
   GasSpec gas;
   double phi0 = 0.55, gas_rate = 0, gas_relax_time = 0, approach_rate = 0;
-  double gas_friction = kNaN;  // friction of the gas stages (NaN: the materials' own)
   std::vector<double> pressures;
   ServoSettings servo;
   double gas_damping_time = 0, damping_crossings = 0.5;
@@ -110,10 +109,6 @@ Setup read_setup(const SceneFile& s) {
   u.gas_rate = s.real("preparation.gas_strain_rate");
   u.gas_relax_time = s.real("preparation.gas_relax_time");
   u.approach_rate = s.real("preparation.approach_strain_rate");
-  if (s.has("preparation.gas_friction")) {
-    u.gas_friction = s.real("preparation.gas_friction");
-    s.require(u.gas_friction >= 0, "preparation.gas_friction", "must not be negative");
-  }
   s.require(u.gas_rate > 0 && u.gas_rate < 0.1, "preparation.gas_strain_rate",
             "must lie in (0, 0.1) per us");
   s.require(u.gas_relax_time >= 0, "preparation.gas_relax_time", "must not be negative");
