@@ -26,6 +26,9 @@ const std::vector<SceneEntry>& scene_registry() {
       {"elastic_moduli",
        "preparation protocol, unloading-branch configurations, elastic probing vs theory",
        run_elastic_moduli},
+      {"mixture_moduli",
+       "glass-rubber mixtures at target pressures: K, G, M, V_p against rubber fraction",
+       run_mixture_moduli},
       // continuum law
       {"continuum_fit",
        "hypoelastic continuum law fitted to the moduli studies, checked on DEM paths",

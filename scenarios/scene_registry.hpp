@@ -50,6 +50,9 @@ void run_confined_compression(const SceneFile&, const RunOptions&);
 void run_elastic_moduli(const SceneFile&, const RunOptions&);
 // Reads and checks every key of an elastic_moduli scene without running it.
 void check_elastic_moduli(const SceneFile&);
+void run_mixture_moduli(const SceneFile&, const RunOptions&);
+// Reads and checks every key of a mixture_moduli scene without running it.
+void check_mixture_moduli(const SceneFile&);
 // continuum law
 void run_continuum_fit(const SceneFile&, const RunOptions&);
 // Reads and checks every key of a continuum_fit scene without running it.

@@ -92,3 +92,26 @@ TEST(SceneInputGuards, InfinityIsLegalOnlyWhereItMeansRigid) {
   expect_refused(text, {"diameter_spread", "1.5", "fill.diameter_spread"},
                  run_confined_compression);
 }
+
+TEST(SceneInputGuards, MixtureModuliRefusesBadFractionsPressuresAndMissingKeys) {
+  const std::string text = shipped_scene("mixture_moduli_quick.toml");
+  auto check = [](const SceneFile& s, const RunOptions&) { check_mixture_moduli(s); };
+  const Mutant mutants[] = {
+      {"soft_volume_fractions", "[0.2, 1.5]", "mixture.soft_volume_fractions"},
+      {"soft_volume_fractions", "[-0.1]", "mixture.soft_volume_fractions"},
+      {"soft_volume_fractions", "[]", "mixture.soft_volume_fractions"},
+      {"pressures", "[]", "preparation.pressures"},
+      {"pressures", "[0.0, 0.5]", "preparation.pressures"},
+      {"pressures", "[0.5, -1.0]", "preparation.pressures"},
+      {"pressures", "[0.5, 0.1]", "preparation.pressures"},                     // not ascending
+      {"soft_volume_fraction", "0.3", "pair_rule_check.soft_volume_fraction"},  // not listed
+      {"pair_rule", "\"arithmetic\"", "contact.pair_rule"},
+      {"soft_material", "\"cork\"", "mixture.soft_material"},
+      {"count", "1e12", "particles.count"},
+  };
+  for (const Mutant& m : mutants) expect_refused(text, m, check);
+  // A missing key is named with its table.
+  std::string missing = text;
+  granular::testing::replace_once(missing, "tangential_stiffness = 150.0", "");
+  expect_refused(missing, {"poisson", "0.5", "materials.rubber.tangential_stiffness"}, check);
+}

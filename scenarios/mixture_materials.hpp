@@ -1,0 +1,56 @@
+// Materials of the mixture study (mixtures-and-waves.md §1, DEM parameter set) and the
+// contact model built from them for every pair of species:
+//
+//   [materials.glass]  shear_modulus = 29000 (or young_modulus)   poisson = 0.3
+//                      density = 2540   tangential_stiffness = 1e4   viscosity = 100
+//                      tangential_viscosity = 0   friction = 0.5
+//   [contact]          pair_rule = "harmonic" | "product_over_sum"   (default harmonic)
+//
+// Normal force: Hertz with E* mixing, f = (4/3) E* sqrt(R delta) delta + damping, with
+// 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j and R = a_i a_j/(a_i + a_j), whatever the pair
+// rule (dem.md §4: "Hertz pairs use E* and R"). Damping: the mixtures chapter writes
+// gamma sqrt(d delta) d(delta)/dt with d the pair diameter a_i + a_j; the engine's Hertz law
+// scales both terms with sqrt(R delta), and d = 4 R for equal spheres, so the coefficient
+// of that law is 2 gamma (exact for equal sizes; within 0.1 % for a +-5 % size spread).
+// Tangential: a constant spring k_t with dashpot gamma_t and Coulomb friction mu.
+// k_t, gamma, gamma_t and mu of unlike species follow the pair rule: "harmonic" is the
+// normalised mean 2pq/(p + q) of the engine's species tables, "product_over_sum" is the
+// source's pq/(p + q). A species with itself keeps its own values under both rules (as the
+// named materials of the wall scenes do), so a one-species packing does not depend on it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/scene_file.hpp"
+#include "kernels/contact_model.hpp"
+
+namespace granular {
+
+struct MixtureMaterial {
+  std::string name;
+  double young = 0, poisson = 0, density = 0;
+  double kt = 0, viscosity = 0, tangential_viscosity = 0, friction = 0;
+  std::string modulus_key;  // which reading of the source's moduli column the scene used
+};
+
+using MixtureModel = ContactModel<HertzNormal, CoulombTangential>;
+
+struct MixtureMaterials {
+  std::vector<MixtureMaterial> materials;  // species slot = index (sorted by name)
+  std::string pair_rule = "harmonic";
+
+  // Reads every [materials.<name>] table and contact.pair_rule; each material gives exactly
+  // one of shear_modulus (the source's column, the default reading) or young_modulus.
+  static MixtureMaterials read(const SceneFile& scene);
+  int slot(const SceneFile& scene, const std::string& key, const std::string& name) const;
+  // The value of a parameter between species a and b (own values for a == b).
+  double pair(int a, int b, double p, double q) const;
+  double effective_young(int a, int b) const;
+  // The model for every pair; `rule` overrides pair_rule ("" keeps it).
+  MixtureModel model(const std::string& rule = "") const;
+};
+
+// The two rules for one parameter of two unlike species.
+double pair_rule_value(const std::string& rule, double p, double q);
+
+}  // namespace granular

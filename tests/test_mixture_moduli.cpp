@@ -1,0 +1,169 @@
+// The mixture study's own pieces: the pair rules for two species against hand-computed
+// values, the power-law fit on exact power laws, and the pressure servo on a small Hertzian
+// glass packing (it must reach each target within its tolerance, on the loading branch).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scenarios/element_test.hpp"
+#include "scenarios/mixture_materials.hpp"
+#include "scenarios/packing.hpp"
+#include "scenarios/power_law_fit.hpp"
+#include "scenarios/pressure_servo.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
+
+using namespace granular;
+
+namespace {
+
+const char* kMaterials = R"(
+[materials.glass]
+shear_modulus = 29000.0
+poisson = 0.3
+density = 2540.0
+tangential_stiffness = 1.0e4
+viscosity = 100.0
+friction = 0.5
+[materials.rubber]
+shear_modulus = 200.0
+poisson = 0.5
+density = 1270.0
+tangential_stiffness = 150.0
+viscosity = 100.0
+friction = 0.5
+)";
+
+MixtureMaterials read_materials(const std::string& rule) {
+  const SceneFile s = SceneFile::parse(
+      std::string(kMaterials) + "[contact]\npair_rule = \"" + rule + "\"\n", "materials.toml");
+  return MixtureMaterials::read(s);
+}
+
+}  // namespace
+
+TEST(MixtureMaterials, PairRulesForGlassAndRubberMatchHandValues) {
+  // Slots by name: glass 0, rubber 1. E = 2 G (1 + nu): 75400 and 600 MPa.
+  const MixtureMaterials h = read_materials("harmonic");
+  ASSERT_EQ(h.materials[0].name, "glass");
+  EXPECT_DOUBLE_EQ(h.materials[0].young, 75400.0);
+  EXPECT_DOUBLE_EQ(h.materials[1].young, 600.0);
+  // 1/E* = (1 - 0.09)/75400 + (1 - 0.25)/600, whatever the rule.
+  EXPECT_NEAR(h.effective_young(0, 0), 41428.571428571, 1e-6);
+  EXPECT_NEAR(h.effective_young(0, 1), 792.349726776, 1e-8);
+  EXPECT_NEAR(h.effective_young(1, 1), 400.0, 1e-10);
+
+  const MixtureModel mh = h.model(), mp = h.model("product_over_sum");
+  const auto &th = mh.tangential.table, &tp = mp.tangential.table;
+  // k_t: harmonic 2 1e4 150 / 10150 = 295.5665..., product over sum 147.7833...
+  EXPECT_NEAR(th(0, 1).kt, 295.566502463, 1e-8);
+  EXPECT_NEAR(tp(0, 1).kt, 147.783251232, 1e-8);
+  EXPECT_EQ(th(0, 1).kt, th(1, 0).kt);
+  // Friction 0.5 with 0.5: 0.5 harmonic, 0.25 product over sum.
+  EXPECT_DOUBLE_EQ(th(0, 1).mu_s, 0.5);
+  EXPECT_DOUBLE_EQ(tp(0, 1).mu_s, 0.25);
+  EXPECT_DOUBLE_EQ(tp(0, 1).mu_d, 0.25);
+  // Like pairs keep their own values under both rules.
+  for (const auto* t : {&th, &tp}) {
+    EXPECT_DOUBLE_EQ((*t)(0, 0).kt, 1e4);
+    EXPECT_DOUBLE_EQ((*t)(1, 1).kt, 150.0);
+    EXPECT_DOUBLE_EQ((*t)(1, 1).mu_s, 0.5);
+  }
+  // Normal law: K = (4/3) E*, viscous coefficient 2 gamma (gamma sqrt(d delta), d = 4R),
+  // gamma of unlike pairs 100 (harmonic) or 50 (product over sum).
+  EXPECT_NEAR(mh.normal.table(0, 1).K, 4.0 / 3.0 * 792.349726776, 1e-8);
+  EXPECT_EQ(mh.normal.table(0, 1).K, mp.normal.table(0, 1).K);
+  EXPECT_TRUE(mh.normal.table(0, 1).reduced_radius);
+  EXPECT_DOUBLE_EQ(mh.normal.table(0, 1).G, 200.0);
+  EXPECT_DOUBLE_EQ(mp.normal.table(0, 1).G, 100.0);
+  EXPECT_DOUBLE_EQ(mp.normal.table(0, 0).G, 200.0);
+  // The rule values themselves, with an infinite member (never sliding).
+  EXPECT_DOUBLE_EQ(pair_rule_value("harmonic", 3.0, 6.0), 4.0);
+  EXPECT_DOUBLE_EQ(pair_rule_value("product_over_sum", 3.0, 6.0), 2.0);
+  EXPECT_DOUBLE_EQ(pair_rule_value("harmonic", INFINITY, 0.5), 1.0);
+  EXPECT_TRUE(std::isinf(pair_rule_value("product_over_sum", INFINITY, INFINITY)));
+}
+
+TEST(MixtureMaterials, ModulusReadingIsExplicitAndExclusive) {
+  std::string text = std::string(kMaterials);
+  granular::testing::replace_once(text, "shear_modulus = 200.0", "young_modulus = 600.0");
+  const MixtureMaterials m = MixtureMaterials::read(SceneFile::parse(text, "young.toml"));
+  EXPECT_EQ(m.materials[1].modulus_key, "young_modulus");
+  EXPECT_DOUBLE_EQ(m.materials[1].young, 600.0);
+  granular::testing::replace_once(text, "young_modulus = 600.0",
+                                  "young_modulus = 600.0\nshear_modulus = 200.0");
+  try {
+    MixtureMaterials::read(SceneFile::parse(text, "both.toml"));
+    ADD_FAILURE() << "both moduli must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("materials.rubber.shear_modulus"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("both.toml"), std::string::npos);
+  }
+}
+
+TEST(PowerLawFit, RecoversExactPowerLaws) {
+  const std::vector<double> P = {0.05, 0.1, 0.2, 0.5, 1.0, 2.0};
+  for (double n : {1.0 / 3.0, 0.5, -0.25}) {
+    std::vector<double> M;
+    for (double p : P) M.push_back(734.0 * std::pow(p, n));
+    const PowerLawFit f = fit_power_law(P, M);
+    EXPECT_EQ(f.points, 6);
+    EXPECT_NEAR(f.exponent, n, 1e-13);
+    EXPECT_NEAR(f.prefactor, 734.0, 1e-10);
+    EXPECT_LT(f.exponent_stderr, 1e-12);
+  }
+  // Non-positive moduli (unjammed states) are left out; two points give no standard error.
+  const PowerLawFit two = fit_power_law({0.1, 0.4, 1.0}, {0.0, 2.0, 5.0});
+  EXPECT_EQ(two.points, 2);
+  EXPECT_NEAR(two.exponent, std::log(2.5) / std::log(2.5), 1e-14);
+  EXPECT_TRUE(std::isnan(two.exponent_stderr));
+  // Standard error against the hand formula: x = e^{0,1,2}, y residuals +-d, -2d at the ends.
+  const double d = 0.01;
+  const PowerLawFit r = fit_power_law({1.0, std::exp(1.0), std::exp(2.0)},
+                                      {std::exp(d), std::exp(0.5 - 2 * d), std::exp(1.0 + d)});
+  // log y = 0.5 log x + (d, -2d, d): slope 0.5 exactly, s^2 = 6 d^2 / 1, Sxx = 2.
+  EXPECT_NEAR(r.exponent, 0.5, 1e-13);
+  EXPECT_NEAR(r.exponent_stderr, std::sqrt(6 * d * d / 2), 1e-12);
+}
+
+TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
+  // 250 glass beads (d = 3.8-4.2 mm), the study's contact law and time step.
+  const MixtureModel model = read_materials("harmonic").model();
+  GasSpec gas;
+  gas.count = 250, gas.diameter_min = 3.8, gas.diameter_max = 4.2, gas.density = 2540.0;
+  gas.phi = 0.3, gas.seed = 5;
+  PeriodicBox box;
+  HostParticles h = random_gas(gas, box);
+  DemParams params;
+  params.dt = 0.1, params.skin = 0.2, params.max_overlap = 0.3;
+  const double m = 2540.0 * M_PI / 6 * 64;  // bead mass at d = 4
+  params.damping.translational = m / 50.0, params.damping.rotational = 0.1 * m * 16 / 50.0;
+  using System = DemSystem<Kokkos::DefaultExecutionSpace, MixtureModel>;
+  System sys(Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, params);
+  strain_to_phi(sys, 0.55, -1e-3 / 3, 500, nullptr);
+  compress_to_pressure(sys, 0.5, 1e-4, 20, 0.74);
+  double mass = 0;
+  for (int i = 0; i < h.size(); ++i)
+    mass += h.density[i] * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+  ServoSettings s;
+  s.tolerance = 0.02, s.ekin_ratio = 1e-3, s.max_cycles = 400;
+  double phi_before = 0;
+  for (double target : {0.5, 2.0}) {
+    const ServoResult r = servo_to_pressure(sys, target, mass / sys.box().volume(), s);
+    EXPECT_TRUE(r.converged) << target << " MPa: P = " << r.m.pressure << " after " << r.cycles;
+    const Measurements now = sys.measure();
+    EXPECT_LT(std::fabs(now.pressure / target - 1), s.tolerance) << now.pressure;
+    EXPECT_LT(now.ekin / now.epot, s.ekin_ratio);
+    EXPECT_GT(now.phi, phi_before);  // loading branch: denser at the higher pressure
+    EXPECT_TRUE(is_jammed(now));
+    phi_before = now.phi;
+  }
+}
+
+TEST(MixtureModuliScene, ShippedSceneFilesRead) {
+  for (const char* name : {"mixture_moduli.toml", "mixture_moduli_quick.toml"}) {
+    const SceneFile s = SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+    EXPECT_EQ(s.text("scene"), "mixture_moduli");
+    EXPECT_NO_THROW(check_mixture_moduli(s)) << name;
+  }
+}
