@@ -356,7 +356,7 @@ void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
 
 void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup u = read_setup(scene);
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
   // when every variant is done, so an interrupted run leaves nothing that looks finished.
   const std::string parts = opts.out_dir + "/variants";
