@@ -9,29 +9,16 @@
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "scenarios/moduli_theory.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace {
-
-std::string backends() {
-  std::string b;
-#ifdef KOKKOS_ENABLE_CUDA
-  b += " CUDA";
-#endif
-#ifdef KOKKOS_ENABLE_OPENMP
-  b += " OpenMP";
-#endif
-#ifdef KOKKOS_ENABLE_SERIAL
-  b += " Serial";
-#endif
-  return b.empty() ? b : b.substr(1);
-}
 
 std::string version_line() {
   const int v = KOKKOS_VERSION;
   return std::string("granular ") + GRANULAR_VERSION + "\nkokkos " + std::to_string(v / 10000) +
          "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
-         " backends: " + backends() +
+         " backends: " + granular::kokkos_backends() +
          "\ndefault execution space: " + Kokkos::DefaultExecutionSpace::name();
 }
 
@@ -122,7 +109,7 @@ int main(int argc, char** argv) {
                                  ": key 'scene' names an unknown scene '" + name +
                                  "' (known:" + known + ")");
     }
-    entry->run(scene, opts);
+    granular::run_scene(*entry, scene, opts);  // the driver, then the run record and report
     std::cout << "results in " << opts.out_dir << "\n";
   } catch (const granular::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
