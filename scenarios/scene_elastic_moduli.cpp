@@ -28,6 +28,7 @@
 #include "scenarios/element_test.hpp"
 #include "scenarios/moduli_outputs.hpp"
 #include "scenarios/moduli_theory.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -578,6 +579,8 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     }
     save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);
     write_text_file(ck.pointer(), std::to_string(k) + "\n");
+    report_progress("variant " + label + ": stage " + std::to_string(k + 1) + " of " +
+                    std::to_string(stages.size()) + " checkpointed");
     ck.remove(k - 1);
     if (stop()) return false;
   }
