@@ -26,7 +26,7 @@ struct ImpactSetup {
   double angle = 0.0;  // incidence angle from the normal (radians): v = speed (sin, 0, -cos)
   double spin[3] = {0, 0, 0};  // initial angular velocity of the moving sphere
   double dt = 1e-3;
-  bool record = false;  // keep the time series
+  bool record = false;                  // keep the time series
   SnapshotSeries* snapshots = nullptr;  // frames for ParaView (the series decides when)
 };
 

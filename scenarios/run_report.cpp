@@ -5,7 +5,9 @@
 #include <unistd.h>
 
 #include <Kokkos_Core.hpp>
+#include <cctype>
 #include <chrono>
+#include <cstdint>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -46,7 +48,7 @@ std::string cpu_model() {
 // the CLI runs one scene).
 struct ActiveRun {
   bool on = false;
-  std::string dir;
+  std::string dir, scene, scene_file;
   std::chrono::steady_clock::time_point start, last_report;
 };
 ActiveRun& active_run() {
@@ -104,9 +106,8 @@ Json run_record(double wall_seconds, const std::string& status, const std::strin
   char host[256] = {0};
   if (::gethostname(host, sizeof host - 1) != 0) host[0] = 0;
   r["hostname"] = std::string(host);
-  struct utsname u{};
-  if (::uname(&u) == 0)
-    r["system"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  struct utsname u {};
+  if (::uname(&u) == 0) r["system"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
   r["cpu"] = cpu_model();
   r["cores"] = static_cast<int>(std::thread::hardware_concurrency());
   if (Kokkos::is_initialized())
@@ -161,12 +162,16 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
   ActiveRun& run = active_run();
   run.on = true;
   run.dir = opts.out_dir;
+  run.scene = entry.name;
+  run.scene_file = scene.path();
   run.start = std::chrono::steady_clock::now();
   run.last_report = run.start - std::chrono::hours(1);
   auto finish = [&](const std::string& status, const std::string& message) {
     run.on = false;
     if (!fs::is_directory(opts.out_dir)) return;  // nothing was written (bad input)
     Json rec = run_record(seconds_since(run.start), status, message);
+    rec["scene"] = run.scene;
+    rec["scene_file"] = run.scene_file;
     const bool fresh = !(stamp(summary) == before) && stamp(summary).exists;
     rec["summary_from_this_run"] = fresh;
     try {
@@ -198,6 +203,8 @@ void report_progress(const std::string& status) {
   if (!run.on || seconds_since(run.last_report) < 10.0) return;
   run.last_report = std::chrono::steady_clock::now();
   Json rec = run_record(seconds_since(run.start), "running", status);
+  rec["scene"] = run.scene;
+  rec["scene_file"] = run.scene_file;
   rec["summary_from_this_run"] = false;
   write_report(run.dir, rec);
 }

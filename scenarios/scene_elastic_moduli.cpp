@@ -28,8 +28,8 @@
 #include "scenarios/element_test.hpp"
 #include "scenarios/moduli_outputs.hpp"
 #include "scenarios/moduli_theory.hpp"
-#include "scenarios/run_report.hpp"
 #include "scenarios/packing.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {

@@ -421,8 +421,8 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
       WaveRecord r;
       SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
                                a == 0 ? snapshot_every : 0);
-      with_material_model(w.mats,
-                          [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
+      with_material_model(
+          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
       const Picks pi = pick_travel_times(r.source, w.signals.picker);
       const Picks po = pick_travel_times(r.force, w.signals.picker);
       Json e = Json::object();

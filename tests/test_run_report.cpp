@@ -108,9 +108,9 @@ TEST_F(RunReport, ReportEmbedsEveryChartListsParametersAndLinksTheData) {
   EXPECT_EQ(images, static_cast<size_t>(pngs));
   // The parameters table: every key the scene read, with the scene file's note on kn.
   EXPECT_NE(html.find("<h2>Parameters</h2>"), std::string::npos);
-  for (const char* key : {"contact.kn", "contact.gamma_n", "particles.density", "particles.diameter",
-                          "particles.partner_diameters", "collisions.impact_speeds",
-                          "collisions.steps_per_contact"})
+  for (const char* key :
+       {"contact.kn", "contact.gamma_n", "particles.density", "particles.diameter",
+        "particles.partner_diameters", "collisions.impact_speeds", "collisions.steps_per_contact"})
     EXPECT_NE(html.find(std::string("<code>") + key + "</code>"), std::string::npos) << key;
   EXPECT_NE(html.find("normal stiffness (1e8 N/m)"), std::string::npos);
   // Results as tables, the run's wall time, links to the data.
@@ -167,8 +167,8 @@ TEST_F(RunReport, ChromiumLoadsEveryImageWithoutConsoleErrors) {
   std::ofstream(page) << html;
   const int rc = granular::testing::run_program(
       {chromium, "--headless", "--disable-gpu", "--no-sandbox", "--no-first-run",
-       "--user-data-dir=" + dir_ + "/chromium-profile", "--virtual-time-budget=10000",
-       "--dump-dom", "file://" + page},
+       "--user-data-dir=" + dir_ + "/chromium-profile", "--virtual-time-budget=10000", "--dump-dom",
+       "file://" + page},
       dump);
   const std::string dom = read_text(dump);
   ASSERT_EQ(rc, 0) << dom;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
 
 #include "core/output.hpp"
 #include "core/scene_file.hpp"
@@ -137,7 +138,8 @@ TEST_F(SnapshotSeriesTest, CompressionSeriesHasEveryDueFrameAndConsistentData) {
   std::vector<long> due = {static_cast<long>(sampled.front())};
   for (double s : sampled)
     if (static_cast<long>(s) / kEvery != due.back() / kEvery) due.push_back(static_cast<long>(s));
-  if (due.back() != static_cast<long>(sampled.back())) due.push_back(static_cast<long>(sampled.back()));
+  if (due.back() != static_cast<long>(sampled.back()))
+    due.push_back(static_cast<long>(sampled.back()));
   const auto frames = check_series(dir_, "snapshots", kParticles, 0);
   ASSERT_EQ(frames.size(), due.size());
   for (size_t k = 0; k < due.size(); ++k) EXPECT_EQ(frames[k].step, due[k]);

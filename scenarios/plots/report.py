@@ -246,7 +246,7 @@ def main(argv):
     run = run or {}
     scene = (summary or {}).get("scene") or run.get("scene") or os.path.basename(
         os.path.abspath(out))
-    scene_file = (summary or {}).get("scene_file", "")
+    scene_file = (summary or {}).get("scene_file") or run.get("scene_file", "")
     unit_line, system = scene_units(scene_file) if scene_file else (None, {})
     notes = scene_comments(scene_file) if scene_file else {}
 
