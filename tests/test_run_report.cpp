@@ -64,7 +64,13 @@ class RunReport : public ::testing::Test {
     RunOptions opts;
     opts.out_dir = dir_ + "/out";
     opts.progress = false;
-    run_scene(entry_named("two_particle_linear"), SceneFile::load(scene_path_), opts);
+    run_scene(entry_named("two_particle_linear"), scene(), opts);
+  }
+  // The scene file as the CLI hands it to a driver: its `scene` key already read.
+  static SceneFile scene() {
+    SceneFile s = SceneFile::load(scene_path_);
+    s.text("scene");
+    return s;
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static std::string out() { return dir_ + "/out"; }
@@ -133,8 +139,7 @@ TEST_F(RunReport, MissingReportScriptDoesNotFailTheRun) {
   opts.progress = false;
   opts.charts = false;
   ::setenv("GRANULAR_PLOTS_DIR", empty.c_str(), 1);
-  EXPECT_NO_THROW(
-      run_scene(entry_named("two_particle_linear"), SceneFile::load(scene_path_), opts));
+  EXPECT_NO_THROW(run_scene(entry_named("two_particle_linear"), scene(), opts));
   ::unsetenv("GRANULAR_PLOTS_DIR");
   EXPECT_TRUE(fs::exists(opts.out_dir + "/summary.json"));
   EXPECT_FALSE(fs::exists(opts.out_dir + "/report.html"));

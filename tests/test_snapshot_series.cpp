@@ -99,8 +99,10 @@ std::vector<Frame> check_series(const std::string& dir, const std::string& name,
     std::stringstream dims((*it)[1].str());
     size_t count = 1, d = 0;
     while (dims >> d) count *= d;
-    ASSERT_TRUE(h5.has(path)) << path << " is not in " << file;
-    EXPECT_EQ(h5.reals(path).size(), count) << path;
+    EXPECT_TRUE(h5.has(path)) << path << " is not in " << file;
+    if (h5.has(path)) {
+      EXPECT_EQ(h5.reals(path).size(), count) << path;
+    }
   }
   // Per frame: position and six attributes (+ the wall quads).
   EXPECT_EQ(items, frames.size() * (7 + (nwalls > 0 ? 1 : 0)));
@@ -119,7 +121,9 @@ class SnapshotSeriesTest : public ::testing::Test {
     opts.out_dir = dir_;
     opts.progress = false;
     opts.charts = false;
-    run_isotropic_compression(SceneFile::parse(kScene, "tiny_compression.toml"), opts);
+    const SceneFile scene = SceneFile::parse(kScene, "tiny_compression.toml");
+    scene.text("scene");  // read by the CLI to pick the driver
+    run_isotropic_compression(scene, opts);
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static std::string dir_;
