@@ -116,7 +116,9 @@ def is_scalar(v):
     return v is None or isinstance(v, (bool, int, float, str))
 
 
-def fmt(v):
+def fmt(v, whole=False):
+    """A value as text; long lists of numbers are summarised unless `whole` (parameters are
+    shown as given)."""
     if v is None:
         return "–"
     if isinstance(v, bool):
@@ -133,16 +135,16 @@ def fmt(v):
         return v
     if isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool)
                                    for x in v):
-        if len(v) <= 8:
+        if len(v) <= 8 or (whole and len(v) <= 200):
             return "[" + ", ".join(fmt(x) for x in v) + "]"
         return "%d values, %s … %s" % (len(v), fmt(min(v)), fmt(max(v)))
     text = json.dumps(v)
     return text if len(text) <= 200 else text[:200] + " …"
 
 
-def cell(v):
+def cell(v, whole=False):
     cls = ' class="num"' if isinstance(v, (int, float)) and not isinstance(v, bool) else ""
-    return "<td%s>%s</td>" % (cls, html.escape(fmt(v)))
+    return "<td%s>%s</td>" % (cls, html.escape(fmt(v, whole)))
 
 
 def table(header, rows):
@@ -286,10 +288,12 @@ def main(argv):
             h.append("<h2>Parameters</h2>")
             if unit_line:
                 h.append('<p class="muted">Units of the scene: %s</p>' % html.escape(unit_line))
-            rows = [["<td><code>%s</code></td>" % html.escape(k), cell(v),
-                     "<td>%s</td>" % html.escape(notes.get(k, ""))]
+            noted = any(k in notes for k in params)
+            rows = [["<td><code>%s</code></td>" % html.escape(k), cell(v, whole=True)] +
+                    (["<td>%s</td>" % html.escape(notes.get(k, ""))] if noted else [])
                     for k, v in params.items()]
-            h.append(table(["key", "value", "note in the scene file"], rows))
+            h.append(table(["key", "value"] + (["note in the scene file"] if noted else []),
+                           rows))
         res = results_html(summary, system)
         if res:
             h.append("<h2>Results</h2>")
