@@ -74,7 +74,7 @@ FileStamp stamp(const std::string& path) {
   std::error_code ec;
   s.time = fs::last_write_time(path, ec);
   if (ec) return s;
-  s.size = fs::file_size(path, ec);
+  s.size = fs::is_directory(path, ec) ? 0 : fs::file_size(path, ec);
   s.exists = !ec;
   return s;
 }
@@ -159,6 +159,10 @@ bool write_report(const std::string& dir, const Json& run) {
 void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts) {
   const std::string summary = opts.out_dir + "/summary.json";
   const FileStamp before = stamp(summary);
+  // Every output file is renamed into place, which changes the folder's time: a run that
+  // leaves it unchanged wrote nothing (refused input, a check of the scene file) and gets
+  // no report, so an earlier run's report stays as it was.
+  const FileStamp folder_before = stamp(opts.out_dir);
   ActiveRun& run = active_run();
   run.on = true;
   run.dir = opts.out_dir;
@@ -168,7 +172,7 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
   run.last_report = run.start - std::chrono::hours(1);
   auto finish = [&](const std::string& status, const std::string& message) {
     run.on = false;
-    if (!fs::is_directory(opts.out_dir)) return;  // nothing was written (bad input)
+    if (!fs::is_directory(opts.out_dir) || stamp(opts.out_dir) == folder_before) return;
     Json rec = run_record(seconds_since(run.start), status, message);
     rec["scene"] = run.scene;
     rec["scene_file"] = run.scene_file;

@@ -1,14 +1,16 @@
 // report.html of a run: written by the CLI's run path for a tiny two-particle run, it embeds
 // every chart of the folder, lists the scene's parameters, links the data files and needs no
 // network; summary.json gains the run record (wall time, machine). A missing report script
-// never fails the run. When Debian's `chromium` is installed, the page is opened headless:
-// every image must decode and nothing may raise an error on the console.
+// never fails the run, and a refused run leaves an earlier report alone. When Debian's `chromium`
+// is installed, the page is opened headless: every image must decode and nothing may raise an error
+// on the console.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <regex>
 
+#include "core/error.hpp"
 #include "core/scene_file.hpp"
 #include "external_program.hpp"
 #include "scenarios/run_report.hpp"
@@ -143,6 +145,19 @@ TEST_F(RunReport, MissingReportScriptDoesNotFailTheRun) {
   ::unsetenv("GRANULAR_PLOTS_DIR");
   EXPECT_TRUE(fs::exists(opts.out_dir + "/summary.json"));
   EXPECT_FALSE(fs::exists(opts.out_dir + "/report.html"));
+}
+
+TEST_F(RunReport, RefusedRunLeavesTheEarlierReportAlone) {
+  const auto before = fs::last_write_time(out() + "/report.html");
+  const std::string bad = dir_ + "/bad.toml";
+  std::ofstream(bad) << read_text(scene_path_) << "\n[extra]\nunknown_key = 1\n";
+  SceneFile scene = SceneFile::load(bad);
+  scene.text("scene");
+  RunOptions opts;
+  opts.out_dir = out();
+  opts.progress = false;
+  EXPECT_THROW(run_scene(entry_named("two_particle_linear"), scene, opts), InputError);
+  EXPECT_EQ(fs::last_write_time(out() + "/report.html"), before);
 }
 
 // Opens a copy of the report in headless Chromium with a probe that writes, once the page
