@@ -1,9 +1,9 @@
 // report.html of a run: written by the CLI's run path for a tiny two-particle run, it embeds
 // every chart of the folder, lists the scene's parameters, links the data files and needs no
 // network; summary.json gains the run record (wall time, machine). A missing report script
-// never fails the run, and a refused run leaves an earlier report alone. When Debian's `chromium`
-// is installed, the page is opened headless: every image must decode and nothing may raise an error
-// on the console.
+// never fails the run, and a refused run leaves an earlier report alone. When Debian's
+// `chromium` is installed, the page is opened headless: every image must decode and nothing
+// may raise an error on the console.
 #include <gtest/gtest.h>
 
 #include <filesystem>
