@@ -365,8 +365,8 @@ void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_nam
     << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" "
     << "Format=\"HDF\">" << h5_name << ":" << group << "/position</DataItem>\n"
     << "   </Geometry>\n";
-  for (const char* name : {"radius", "velocity"}) {
-    const bool vec = std::string(name) == "velocity";
+  for (const char* name : {"radius", "velocity", "angular_velocity"}) {
+    const bool vec = std::string(name) != "radius";
     x << "   <Attribute Name=\"" << name << "\" AttributeType=\"" << (vec ? "Vector" : "Scalar")
       << "\" Center=\"Node\">\n    <DataItem Dimensions=\"" << n << (vec ? " 3" : "")
       << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group << "/"

@@ -103,7 +103,8 @@ class H5Reader {
 };
 
 // XDMF sidecar so ParaView opens a particle snapshot stored in an HDF5 file:
-// datasets <group>/position (n x 3), <group>/radius, <group>/velocity.
+// datasets <group>/position (n x 3), <group>/radius, <group>/velocity and
+// <group>/angular_velocity (n x 3), as write_state writes them.
 void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
                          const std::string& group, int n);
 

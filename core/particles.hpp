@@ -76,6 +76,7 @@ struct Particles {
     Particles p(n);
     auto x = Kokkos::create_mirror_view(p.x);
     auto v = Kokkos::create_mirror_view(p.v);
+    auto w = Kokkos::create_mirror_view(p.w);
     auto r = Kokkos::create_mirror_view(p.radius);
     auto m = Kokkos::create_mirror_view(p.mass);
     auto in = Kokkos::create_mirror_view(p.inertia);
@@ -84,6 +85,10 @@ struct Particles {
     for (int i = 0; i < n; ++i) {
       x(i, 0) = h.x[i], x(i, 1) = h.y[i], x(i, 2) = h.z[i];
       v(i, 0) = h.vx[i], v(i, 1) = h.vy[i], v(i, 2) = h.vz[i];
+      // Generators that fill only positions and velocities leave the spins at rest.
+      const bool spins = h.wx.size() == h.radius.size();
+      w(i, 0) = spins ? h.wx[i] : 0.0, w(i, 1) = spins ? h.wy[i] : 0.0;
+      w(i, 2) = spins ? h.wz[i] : 0.0;
       r(i) = h.radius[i];
       if (!(h.radius[i] > 0) || !(h.density[i] > 0))
         throw InputError("particle " + std::to_string(i) + " has a non-positive radius or density");
@@ -94,6 +99,7 @@ struct Particles {
     }
     Kokkos::deep_copy(p.x, x);
     Kokkos::deep_copy(p.v, v);
+    Kokkos::deep_copy(p.w, w);
     Kokkos::deep_copy(p.radius, r);
     Kokkos::deep_copy(p.mass, m);
     Kokkos::deep_copy(p.inertia, in);

@@ -38,6 +38,17 @@ class SceneFile {
   bool flag(const std::string& key, bool def) const;
   std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
   bool has(const std::string& key) const;
+  // A named choice: `parse` turns the text of `key` (default `def`) into a value and throws
+  // InputError for an unknown name; the error is re-thrown naming the key and the file.
+  template <class Parse>
+  auto choice(const std::string& key, const std::string& def, Parse parse) const {
+    const std::string value = text(key, def);
+    try {
+      return parse(value);
+    } catch (const InputError& e) {
+      fail(key, e.what());
+    }
+  }
   // Names of the sub-tables of table `key`, sorted by name (e.g. the walls of [walls.floor],
   // [walls.top]); empty when the table is absent. A value that is not a table is an error.
   std::vector<std::string> tables(const std::string& key) const;

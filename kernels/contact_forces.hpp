@@ -144,8 +144,10 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
         constexpr int H = Model::history;
         constexpr bool rot = Model::rotations;
         constexpr int NB = rot ? 9 : 3;
-        (void)history.extent(0);  // nvcc: capture outside the constexpr-if that uses it
+        (void)history.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
         (void)hook;
+        (void)m;
+        (void)dt;
         const double r3[3] = {rate[0], rate[1], rate[2]};
         const Body bi = load_body(pv, i, rot);
         for (int k = offsets(i); k < owned_end(i); ++k) {  // the contacts i owns

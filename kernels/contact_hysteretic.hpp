@@ -18,7 +18,8 @@ struct HystereticNormal {
   };
   PairTable<Params> table;
 
-  // Elastic-plastic part; updates delta_max in h[0] when `update` is set.
+  // Elastic-plastic part. Moves the history dmax (delta_max) as the contact loads further
+  // or slides along the adhesive branch; callers that only look pass a copy.
   KOKKOS_INLINE_FUNCTION static double piecewise(const Params& q, double delta, double& dmax) {
     if (delta > dmax) dmax = delta;  // virgin loading
     const double d0 = (1.0 - q.k1 / q.k2) * dmax;

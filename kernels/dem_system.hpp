@@ -260,12 +260,12 @@ class DemSystem {
       throw InputError(
           "exact restarts of multi-contact runs are not supported: their "
           "previous-step contact forces are not saved");
-    for (auto [name, v] :
-         {std::pair{"x", p_.x}, {"v", p_.v}, {"w", p_.w}, {"f", p_.f}, {"torque", p_.torque}})
-      save_view(out, g + "/particles/" + name, v);
-    for (auto [name, v] :
-         {std::pair{"radius", p_.radius}, {"mass", p_.mass}, {"inertia", p_.inertia}})
-      save_view(out, g + "/particles/" + name, v);
+    // One call per field, spelt out: nvcc's front end rejects the braced list of pairs.
+    const std::string pg = g + "/particles/";
+    save_view(out, pg + "x", p_.x), save_view(out, pg + "v", p_.v);
+    save_view(out, pg + "w", p_.w), save_view(out, pg + "f", p_.f);
+    save_view(out, pg + "torque", p_.torque), save_view(out, pg + "radius", p_.radius);
+    save_view(out, pg + "mass", p_.mass), save_view(out, pg + "inertia", p_.inertia);
     save_view(out, g + "/particles/species", p_.species);
     save_view(out, g + "/particles/id", p_.id);
     nl_.save(out, g + "/neighbor_list");
@@ -282,12 +282,11 @@ class DemSystem {
     const auto s = in.reals(g + "/scalars");
     if (s.size() != 15) throw InputError("restart group " + g + " has malformed scalars");
     Particles<ExecSpace> q = p_;
-    for (auto [name, v] :
-         {std::pair{"x", &q.x}, {"v", &q.v}, {"w", &q.w}, {"f", &q.f}, {"torque", &q.torque}})
-      load_view(in, g + "/particles/" + name, *v);
-    for (auto [name, v] :
-         {std::pair{"radius", &q.radius}, {"mass", &q.mass}, {"inertia", &q.inertia}})
-      load_view(in, g + "/particles/" + name, *v);
+    const std::string pg = g + "/particles/";
+    load_view(in, pg + "x", q.x), load_view(in, pg + "v", q.v);
+    load_view(in, pg + "w", q.w), load_view(in, pg + "f", q.f);
+    load_view(in, pg + "torque", q.torque), load_view(in, pg + "radius", q.radius);
+    load_view(in, pg + "mass", q.mass), load_view(in, pg + "inertia", q.inertia);
     load_view(in, g + "/particles/species", q.species);
     load_view(in, g + "/particles/id", q.id);
     if (static_cast<int>(q.x.extent(0)) != p_.n)

@@ -48,6 +48,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
   auto v = p.v, w = p.w;
   auto mass = p.mass, inertia = p.inertia;
   auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
+  auto owned_end = nl.owned_end();
   const PeriodicBox b = box;
   const Model m = model;
   const int thr = rattler_threshold;
@@ -65,7 +66,7 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
           // Evaluated from the owner's side (lower identity), where the history lives;
           // stress and energy of a pair are the same seen from either side.
           const int j = neighbors(k);
-          const bool own = pv.id(j) > pv.id(i);
+          const bool own = k < owned_end(i);  // owned entries come first in each row
           const int a = own ? i : j, c2 = own ? j : i, slot = own ? k : mirror(k);
           PairState s;
           if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
@@ -200,7 +201,7 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::nonaffine", p.n, 4);
   const ParticleViews<ExecSpace> pv(p);
-  auto offsets = nl.offsets(), neighbors = nl.neighbors();
+  auto offsets = nl.offsets(), neighbors = nl.neighbors(), owned_end = nl.owned_end();
   const PeriodicBox b = box;
   const double s[3] = {box.len[0] / box0.len[0], box.len[1] / box0.len[1],
                        box.len[2] / box0.len[2]};
@@ -210,10 +211,9 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
         double sum_d = 0, sum_e = 0, sum_ratio = 0, m = 0;
         const Body bi = load_body(pv, i, false);
         const int idi = pv.id(i);
-        for (int k = offsets(i); k < offsets(i + 1); ++k) {
+        for (int k = offsets(i); k < owned_end(i); ++k) {  // each contact once, by its owner
           const int j = neighbors(k);
           const int idj = pv.id(j);
-          if (idj < idi) continue;  // each contact once
           double rx, ry, rz, r2;
           if (!touching(pv, b, bi, j, rx, ry, rz, r2)) continue;
           const double l[3] = {rx, ry, rz};

@@ -113,15 +113,20 @@ KOKKOS_INLINE_FUNCTION void evaluate_with_normal_overlap(const Model& m, const P
 
 namespace multicontact {
 
+// Column indices are enumerators, not constexpr variables: a View's operator() takes its
+// indices by reference, and nvcc has no device copy of a namespace-scope variable to bind.
 // Columns of the MC-strain scratch per list entry (each particle's view of its contact):
 // inward normal (3), lever lambda (0: not touching), previous normal force, correction S.
-constexpr int kSN = 0, kSLever = 3, kSForce = 4, kSCorr = 5, kStrainEntryColumns = 6;
+enum : int { kSN = 0, kSLever = 3, kSForce = 4, kSCorr = 5 };
+constexpr int kStrainEntryColumns = 6;
 // Columns per (particle, wall) of MC-strain: previous normal force (kept across steps and
 // reordered with the particles), then scratch: correction, inward normal (3), lever.
-constexpr int kWForce = 0, kWCorr = 1, kWN = 2, kWLever = 5, kStrainWallColumns = 6;
+enum : int { kWForce = 0, kWCorr = 1, kWN = 2, kWLever = 5 };
+constexpr int kStrainWallColumns = 6;
 // Columns of the MC-stress rows per owner entry: l.f seen from i and from j (each particle's
 // branch vector dotted with the force on it), normal n (3), beta nu A.
-constexpr int kTi = 0, kTj = 1, kTN = 2, kTCoef = 5, kStressEntryColumns = 6;
+enum : int { kTi = 0, kTj = 1, kTN = 2, kTCoef = 5 };
+constexpr int kStressEntryColumns = 6;
 
 // Per species: the prefactor -gamma (1 + nu)/(2 pi E) of MC-strain, and nu (a named type:
 // device lambdas may not capture function-local types).
@@ -323,7 +328,9 @@ class MultiContactForces {
     }
   }
 
- private:
+  // The passes below are public only because nvcc rejects extended lambdas whose enclosing
+  // member function is private; they are not meant to be called from outside.
+
   // MC-strain, before the pair pass: each particle describes each of its contacts (inward
   // normal, lever, previous force; pair entries in list order, then walls) and sums, for
   // each, the overlap its other contacts cause there with its own E and nu. Each particle
@@ -484,6 +491,7 @@ class MultiContactForces {
         });
   }
 
+ private:
   MultiContact opt_;
   ContactHistory<ExecSpace, 1> prev_;  // MC-strain: normal force per entry (owner rows)
   rows_view entry_;                    // per list entry: MC-strain or MC-stress columns

@@ -1,9 +1,10 @@
 // Linked-cell binning and a size-aware Verlet neighbour list with a skin (full list, CSR).
 //
 // Full list (each pair stored for both particles) so that every particle sums its own
-// forces in a fixed order: no atomics, no scatter buffers, and results that are bitwise
-// identical for any thread count and on any backend. The order inside a cell is sorted
-// by particle index for the same reason.
+// forces in a fixed order: no atomics, and results that are bitwise identical for any
+// thread count and on any backend. Each contact is computed once, by its owner (the lower
+// identity), and gathered by both through the mirror entry. The order inside a cell is
+// sorted by particle identity for the same reason.
 //
 // The list is rebuilt only when it may have become wrong: some particle moved more than
 // half the skin since the build, counting both its own motion and the affine shrinking of
@@ -94,8 +95,8 @@ class NeighborList {
   // partners with a higher identity (contacts i owns), the rest those with a lower one. The
   // force loops then need no identity look-ups to tell them apart.
   const int_view& owned_end() const { return owned_end_; }  // n
-  // Particles in cell order (cells in z, y, x order; index order inside a cell): a
-  // space-filling order that keeps neighbours close in memory.
+  // Particles in cell order (cells in z, y, x lexicographic order; identity order inside a
+  // cell): particles of a cell and of its x-neighbours sit close in memory.
   const int_view& cell_order() const { return cell_particles_; }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.

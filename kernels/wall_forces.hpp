@@ -82,9 +82,13 @@ void add_external_forces(const Particles<ExecSpace>& p,
         constexpr int H = Model::history;
         constexpr bool rot = Model::rotations;
         constexpr int WC = kWallColumns;
+        // nvcc: a variable first captured inside `if constexpr` is an error, so every
+        // capture used only in such a branch is named here first.
         (void)history.extent(0);
         (void)torque.extent(0);
         (void)hook;
+        (void)m;
+        (void)dt;
         const Body bi = load_body(pv, i, rot);
         double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
         double qi[3] = {0, 0, 0};

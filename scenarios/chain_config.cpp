@@ -7,10 +7,10 @@ namespace granular {
 ChainScene read_chain_scene(const SceneFile& scene) {
   ChainScene c;
   c.spec.beads = scene.count("chain.beads", 2, 8.0 * 16);
-  c.spec.boundary = parse_chain_boundary(scene.text("chain.boundary", "fixed"));
-  c.spec.force = parse_chain_force(scene.text("chain.force", "hertz"));
-  c.spec.rule = parse_stiffness_rule(scene.text("chain.stiffness_rule", "radius"));
-  c.spec.target = parse_disorder_target(scene.text("disorder.on", "mass_and_stiffness"));
+  c.spec.boundary = scene.choice("chain.boundary", "fixed", parse_chain_boundary);
+  c.spec.force = scene.choice("chain.force", "hertz", parse_chain_force);
+  c.spec.rule = scene.choice("chain.stiffness_rule", "radius", parse_stiffness_rule);
+  c.spec.target = scene.choice("disorder.on", "mass_and_stiffness", parse_disorder_target);
   c.spec.seed = static_cast<std::uint64_t>(scene.integer("disorder.seed", 1));
   c.xis = scene.reals("disorder.xi");
   c.realizations = scene.count("disorder.realizations", 1, 0.0);

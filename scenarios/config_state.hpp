@@ -71,11 +71,11 @@ ConfigState snapshot(const System& sys, const std::vector<double>& density, doub
   if (H > 0) {
     const auto& nl = sys.neighbor_list();
     auto off = Kokkos::create_mirror_view_and_copy(h, nl.offsets());
+    auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
     auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
     std::vector<std::pair<std::pair<int, int>, int>> rows;
     for (int i = 0; i < n; ++i)
-      for (int k = off(i); k < off(i + 1); ++k) {
-        if (id(nb(k)) < id(i)) continue;
+      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns
         bool any = false;
         for (int q = 0; q < H; ++q) any = any || hist(k, q) != 0.0;
         if (any) rows.push_back({{id(i), id(nb(k))}, k});
@@ -117,13 +117,13 @@ void restore_history(System& sys, const ConfigState& c) {
     const auto& nl = sys.neighbor_list();
     auto h = Kokkos::HostSpace();
     auto off = Kokkos::create_mirror_view_and_copy(h, nl.offsets());
+    auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
     auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
     auto id = Kokkos::create_mirror_view_and_copy(h, sys.particles().id);
     Kokkos::deep_copy(hist, 0.0);
     size_t restored = 0;
     for (int i = 0; i < sys.particles().n; ++i)
-      for (int k = off(i); k < off(i + 1); ++k) {
-        if (id(nb(k)) < id(i)) continue;
+      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns
         const auto it = row.find({id(i), id(nb(k))});
         if (it == row.end()) continue;
         for (int q = 0; q < H; ++q) hist(k, q) = c.history[static_cast<size_t>(it->second) * H + q];

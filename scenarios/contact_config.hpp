@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 #include "core/error.hpp"
 #include "core/scene_file.hpp"
@@ -36,11 +37,18 @@ template <class F>
 void with_contact_model(const ContactConfig& c, F&& f) {
   auto with_normal = [&](auto normal) {
     auto with_tangential = [&](auto tangential) {
-      if (c.rolling) {
-        f(ContactModel<decltype(normal), decltype(tangential), RollingTorsion>{
+      using Normal = std::decay_t<decltype(normal)>;
+      using Tangential = decltype(tangential);
+      // Rolling resistance without tangential forces is refused by ContactConfig::read, so
+      // that combination is never instantiated (each one is a whole set of kernels).
+      if constexpr (std::is_same_v<Tangential, NoTangential>) {
+        if (c.rolling) throw InputError("contact.rolling needs contact.tangential = \"coulomb\"");
+        f(ContactModel<Normal, Tangential, NoRolling>{normal, tangential, {}});
+      } else if (c.rolling) {
+        f(ContactModel<Normal, Tangential, RollingTorsion>{
             normal, tangential, RollingTorsion::uniform(c.rolling_params)});
       } else {
-        f(ContactModel<decltype(normal), decltype(tangential), NoRolling>{normal, tangential, {}});
+        f(ContactModel<Normal, Tangential, NoRolling>{normal, tangential, {}});
       }
     };
     if (c.tangential == "coulomb") {

@@ -1,6 +1,7 @@
 // Writing DEM states: a particle snapshot group in an HDF5 file (position, velocity,
-// radius, mass, id, box) that ParaView opens through an XDMF sidecar, and the same group
-// read back as a checkpoint.
+// angular velocity, radius, species, id, box) that ParaView opens through an XDMF sidecar,
+// and the same group read back as a starting state. A snapshot holds no contact history
+// (tangential springs): exact restarts use DemSystem::save_restart instead.
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <string>
@@ -20,20 +21,27 @@ void write_state(H5Writer& out, const std::string& group, const Particles<ExecSp
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
   auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
   auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
+  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.w);
+  auto sp = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
   auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
-  // Rows in identity order, whatever order the engine keeps in memory for locality.
-  std::vector<double> pos(3 * n), vel(3 * n), rad(n);
-  std::vector<int> ids(n);
+  // Rows in identity order, whatever order the engine keeps in memory for locality: row k
+  // is the particle of identity k (the /id column says so explicitly for readers).
+  std::vector<double> pos(3 * n), vel(3 * n), spin(3 * n), rad(n);
+  std::vector<int> ids(n), species(n);
   for (int i = 0; i < n; ++i) {
     const int row = id(i);
-    for (int d = 0; d < 3; ++d) pos[3 * row + d] = x(i, d), vel[3 * row + d] = v(i, d);
+    for (int d = 0; d < 3; ++d)
+      pos[3 * row + d] = x(i, d), vel[3 * row + d] = v(i, d), spin[3 * row + d] = w(i, d);
     rad[row] = r(i);
-    ids[row] = row;
+    ids[row] = id(i);
+    species[row] = sp(i);
   }
   const hsize_t nn = static_cast<hsize_t>(n);
   out.write(group + "/position", pos, {nn, 3});
   out.write(group + "/velocity", vel, {nn, 3});
+  out.write(group + "/angular_velocity", spin, {nn, 3});
   out.write(group + "/radius", rad);
+  out.write(group + "/species", species);
   out.write(group + "/id", ids);
   out.write(group + "/box_lo", std::vector<double>(box.lo, box.lo + 3));
   out.write(group + "/box_len", std::vector<double>(box.len, box.len + 3));
@@ -60,6 +68,22 @@ inline HostParticles read_state(const H5Reader& in, const std::string& group, Pe
     h.vx[i] = vel[3 * i], h.vy[i] = vel[3 * i + 1], h.vz[i] = vel[3 * i + 2];
     h.radius[i] = rad[i];
     h.density[i] = density;
+  }
+  // Older snapshots have neither spins nor species: those start at rest and as species 0.
+  if (in.has(group + "/angular_velocity")) {
+    const auto spin = in.reals(group + "/angular_velocity");
+    if (spin.size() != pos.size())
+      throw InputError("state group " + group + ": angular_velocity does not match " +
+                       std::to_string(n) + " particles");
+    for (int i = 0; i < n; ++i)
+      h.wx[i] = spin[3 * i], h.wy[i] = spin[3 * i + 1], h.wz[i] = spin[3 * i + 2];
+  }
+  if (in.has(group + "/species")) {
+    const auto species = in.ints(group + "/species");
+    if (species.size() != rad.size())
+      throw InputError("state group " + group + ": species does not match " + std::to_string(n) +
+                       " particles");
+    for (int i = 0; i < n; ++i) h.species[i] = species[i];
   }
   for (int d = 0; d < 3; ++d) box.lo[d] = lo[d], box.len[d] = len[d];
   return h;

@@ -1,4 +1,4 @@
-// The `granular` command line: run a scene, print versions.
+// The `granular` command line: run or check a scene, print versions.
 #include <CLI/CLI.hpp>
 #include <Kokkos_Core.hpp>
 #include <filesystem>
@@ -46,6 +46,11 @@ int main(int argc, char** argv) {
                   "continue with --resume")
       ->check(CLI::NonNegativeNumber);
 
+  auto* check =
+      app.add_subcommand("check", "read and check every key of a scene file, run nothing");
+  std::string check_path;
+  check->add_option("scene", check_path, "scene file (TOML)")->required()->check(CLI::ExistingFile);
+
   auto* list = app.add_subcommand("scenes", "list the scene drivers");
 
   auto* theory = app.add_subcommand("theory", "EMT and fluctuation-theory moduli (JSON)");
@@ -80,7 +85,7 @@ int main(int argc, char** argv) {
     std::cout << j.dump();
     return 0;
   }
-  if (!run->parsed()) {
+  if (!run->parsed() && !check->parsed()) {
     std::cout << app.help();
     return 0;
   }
@@ -91,26 +96,24 @@ int main(int argc, char** argv) {
   Kokkos::initialize(args);
   int rc = 0;
   try {
+    const bool checking = check->parsed();
+    if (checking) scene_path = check_path;
     auto scene = granular::SceneFile::load(scene_path);
-    const std::string name = scene.text("scene");
+    const granular::SceneEntry& entry = granular::find_scene(scene);
     granular::RunOptions opts;
     opts.out_dir =
         out_dir.empty() ? "out/" + std::filesystem::path(scene_path).stem().string() : out_dir;
     opts.progress = !quiet;
     opts.resume = resume;
     opts.stop_after_minutes = stop_after_minutes;
-    const granular::SceneEntry* entry = nullptr;
-    for (const auto& e : granular::scene_registry())
-      if (name == e.name) entry = &e;
-    if (!entry) {
-      std::string known;
-      for (const auto& e : granular::scene_registry()) known += std::string(" ") + e.name;
-      throw granular::InputError("scene file " + scene_path +
-                                 ": key 'scene' names an unknown scene '" + name +
-                                 "' (known:" + known + ")");
+    opts.check_only = checking;
+    if (checking) {
+      entry.run(scene, opts);
+      std::cout << scene_path << ": every key read and checked (" << entry.name << ")\n";
+    } else {
+      granular::run_scene(entry, scene, opts);  // the driver, then the run record and report
+      std::cout << "results in " << opts.out_dir << "\n";
     }
-    granular::run_scene(*entry, scene, opts);  // the driver, then the run record and report
-    std::cout << "results in " << opts.out_dir << "\n";
   } catch (const granular::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     rc = 2;

@@ -47,7 +47,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   const int source = where == "first" ? 0 : N / 2;
   const long samples = std::lround(t_max / cs.sample_every);
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = chain_summary_header(scene, "chain_impulse");
   Json runs = Json::array();

@@ -112,7 +112,7 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   scene.reject_unknown_keys();
   const int R = cs.realizations;
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = chain_summary_header(scene, "chain_master_equation");
   Json runs = Json::array();

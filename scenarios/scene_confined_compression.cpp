@@ -281,7 +281,7 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
 
 void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   const Setup c = read_setup(scene);
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "confined_compression";

@@ -43,7 +43,7 @@ struct Setup {
 Setup read_setup(const SceneFile& scene) {
   Setup s;
   s.update =
-      volume_fraction_update_from(scene.text("law.volume_fraction_update", "mass_conservation"));
+      scene.choice("law.volume_fraction_update", "mass_conservation", volume_fraction_update_from);
   s.step = scene.real("law.step");
   scene.require(s.step > 0 && s.step < 0.01, "law.step", "must lie in (0, 0.01)");
   s.z_min = scene.real("fit.z_min", 4.0);
@@ -150,7 +150,7 @@ void check_continuum_fit(const SceneFile& scene) { read_setup(scene); }
 void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
   const Setup s = read_setup(scene);
   const auto t0 = std::chrono::steady_clock::now();
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "continuum_fit";

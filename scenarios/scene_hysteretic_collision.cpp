@@ -28,7 +28,7 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   scene.require(resolution >= 50, "collision.steps_per_contact", "must be at least 50");
   scene.reject_unknown_keys();
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "hysteretic_collision";

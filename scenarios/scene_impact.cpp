@@ -100,7 +100,7 @@ ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, do
 
 void run_impact(const SceneFile& scene, const RunOptions& opts) {
   const ImpactScene c = read_scene(scene);
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   const MaterialSet& mats = c.materials;
   const double estar = mats.effective_young(c.sphere, c.target);
   const double rstar =

@@ -116,7 +116,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
   const double d_mean = 0.5 * (gas.diameter_min + gas.diameter_max);
 

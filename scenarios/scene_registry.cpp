@@ -1,6 +1,9 @@
 // Table of scene drivers known to the CLI.
 #include "scenarios/scene_registry.hpp"
 
+#include "core/error.hpp"
+#include "core/output.hpp"
+
 namespace granular {
 
 const std::vector<SceneEntry>& scene_registry() {
@@ -43,6 +46,22 @@ const std::vector<SceneEntry>& scene_registry() {
        run_chain_master_equation},
   };
   return entries;
+}
+
+const SceneEntry& find_scene(const SceneFile& scene) {
+  const std::string name = scene.text("scene");
+  for (const auto& e : scene_registry())
+    if (name == e.name) return e;
+  std::string known;
+  for (const auto& e : scene_registry()) known += std::string(" ") + e.name;
+  throw InputError("scene file " + scene.path() + ": key 'scene' names an unknown scene '" + name +
+                   "' (known:" + known + ")");
+}
+
+bool begin_outputs(const RunOptions& opts) {
+  if (opts.check_only) return false;
+  make_directories(opts.out_dir);
+  return true;
 }
 
 }  // namespace granular

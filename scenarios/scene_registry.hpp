@@ -15,6 +15,9 @@ struct RunOptions {
   // Wall-clock budget: a scene that checkpoints stops at its first checkpoint after this
   // many minutes (0: no budget); the run is continued with --resume.
   double stop_after_minutes = 0;
+  // Read and check every key of the scene, then stop: nothing is written and nothing runs
+  // (`granular check`, and the scene-file fuzz test).
+  bool check_only = false;
 };
 
 using SceneRunner = void (*)(const SceneFile&, const RunOptions&);
@@ -26,6 +29,15 @@ struct SceneEntry {
 };
 
 const std::vector<SceneEntry>& scene_registry();
+
+// The driver named by the file's `scene` key; an unknown name is an InputError that names
+// the file and lists the known scenes.
+const SceneEntry& find_scene(const SceneFile& scene);
+
+// Every driver calls this once all its keys are read and checked, before it writes or
+// computes anything: it creates the output directory and returns true, or in check mode
+// returns false and the driver returns.
+bool begin_outputs(const RunOptions& opts);
 
 // Scene drivers (one per scenarios/scene_*.cpp file).
 // DEM scenes

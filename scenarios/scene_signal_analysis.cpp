@@ -171,7 +171,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
   }
   scene.reject_unknown_keys();
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "signal_analysis";

@@ -104,7 +104,7 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
 
   const std::vector<Layout> layouts = {{"three", {{1, 0, 0}, {-1, 0, 0}}},
                                        {"five", {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}}};
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "soft_collision";

@@ -28,7 +28,7 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   scene.require(resolution >= 10, "collisions.steps_per_contact", "must be at least 10");
   scene.reject_unknown_keys();
 
-  make_directories(opts.out_dir);
+  if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
   summary["scene"] = "two_particle_linear";

@@ -120,6 +120,9 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.dt > 0, "run.dt", "must be positive");
   s.require(w.max_overlap > 0 && w.max_overlap < 0.5, "run.max_overlap", "must lie in (0, 0.5)");
   for (double f : w.dt_check) s.require(f > 0 && f <= 1, "run.dt_check", "factors in (0, 1]");
+  w.restitution_check = s.reals("run.restitution_check", {});
+  for (double e : w.restitution_check)
+    s.require(e > 0 && e <= 1, "run.restitution_check", "restitutions in (0, 1]");
 
   w.signals = read_signal_settings(s, "analysis", w.pre_time);
   return w;

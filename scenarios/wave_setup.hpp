@@ -17,7 +17,9 @@
 //   [receivers]   slab_positions = [0.3, 0.7] (fractions of the wall gap)   slab_width = 2 (d)
 //   [probe]       strain = 1e-5   ramp_time   hold_time   damping_time
 //   [analysis.*]  pickers, spectrum windows, ratio band (signal_report.hpp)
-//   [run]         dt   max_overlap   dt_check = [factors]  (travel time against dt x factor)
+//   [run]         dt   max_overlap   dt_check = [factors]  (travel time and Q against dt x factor)
+//                 restitution_check = [e, ...]  (travel time and Q with every material's
+//                 restitution set to e: 1 = no contact damping, what scattering alone leaves)
 #pragma once
 #include <string>
 #include <vector>
@@ -48,6 +50,7 @@ struct WaveSetup {
   double probe_strain = 1e-5, probe_ramp = 0, probe_hold = 0, probe_damping_time = 0;
   double dt = 0, max_overlap = 0.05;
   std::vector<double> dt_check;
+  std::vector<double> restitution_check;
   SignalSettings signals;
 };
 

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "test_support.hpp"  // read_text
+
 namespace granular::testing {
 
 // The full path of `name` on PATH, or "" when it is not installed.
@@ -49,13 +51,6 @@ inline int run_program(const std::vector<std::string>& args, const std::string& 
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-inline std::string read_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
 }
 
 }  // namespace granular::testing

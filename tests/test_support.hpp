@@ -26,12 +26,17 @@ inline std::string temp_dir(const std::string& name) {
   return dir.string();
 }
 
-// The text of scenarios/<name> in the source tree.
-inline std::string shipped_scene(const std::string& name) {
-  std::ifstream f(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+// The whole text of a file ("" when it cannot be read).
+inline std::string read_text(const std::string& path) {
+  std::ifstream f(path);
   std::stringstream ss;
   ss << f.rdbuf();
   return ss.str();
+}
+
+// The text of scenarios/<name> in the source tree.
+inline std::string shipped_scene(const std::string& name) {
+  return read_text(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
 }
 
 // Replaces the first occurrence of `from` in `text` (a mutated scene file); a test whose

@@ -69,3 +69,49 @@ with h5py.File(h5, "r") as f:
     axes[1].set_ylabel("ln |A_far slab / A_near slab|")
     axes[1].legend(fontsize=7)
     save(fig, outdir, "moduli_and_q.png")
+
+# Numerics: picked travel time and Q against the time step, and Q against the contacts'
+# restitution (1: no contact damping), from summary.json when the run made those checks.
+import json
+import os
+
+summary_path = os.path.join(outdir, "summary.json")
+if os.path.exists(summary_path):
+    with open(summary_path) as fh:
+        states = json.load(fh).get("states", [])
+
+    def travel(e):
+        v = e.get("travel", {}).get("first_peak", {}).get("travel_time")
+        return np.nan if v is None else v
+
+    def q_of(e):
+        v = e.get("Q")
+        return v if isinstance(v, (int, float)) else np.nan
+
+    if any(s.get("dt_check") or s.get("restitution_check") for s in states):
+        fig, axes = plt.subplots(1, 3, figsize=(13, 3.5))
+        for s in states:
+            lab = f"{s['sigma_xx']:.3g} MPa"
+            ref = s.get("reference_numerics")
+            pts = ([ref] if ref else []) + list(s.get("dt_check", []))
+            pts = sorted(pts, key=lambda e: e["dt"])
+            if pts:
+                dt = [e["dt"] for e in pts]
+                t0 = travel(pts[0])
+                axes[0].plot(dt, [travel(e) / t0 - 1 for e in pts], "o-", label=lab)
+                axes[1].plot(dt, [q_of(e) for e in pts], "o-", label=lab)
+            rs = list(s.get("restitution_check", []))
+            if rs:
+                rs = sorted(rs, key=lambda e: e["restitution"])
+                axes[2].plot([e["restitution"] for e in rs], [q_of(e) for e in rs], "o-",
+                             label=lab)
+        axes[0].axhspan(-0.01, 0.01, color="0.9")
+        axes[0].set_xlabel("time step (us)")
+        axes[0].set_ylabel("first-peak travel time / smallest-dt value - 1")
+        axes[1].set_xlabel("time step (us)")
+        axes[1].set_ylabel("Q (spectral ratio, slabs)")
+        axes[2].set_xlabel("contact restitution e (1: no contact damping)")
+        axes[2].set_ylabel("Q (spectral ratio, slabs)")
+        for ax in axes:
+            ax.legend(fontsize=7)
+        save(fig, outdir, "numerics.png")
