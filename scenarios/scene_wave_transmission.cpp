@@ -552,6 +552,11 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     {  // the reference run in the same form, for the charts
       Json e = numerics_entry(ref, w, p);
       e["dt"] = w.dt;
+      // Its restitution, when every material has the same one (a point of the damping check).
+      bool uniform = true;
+      for (const auto& mat : w.mats.materials)
+        uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
+      e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
       row["reference_numerics"] = e;
     }
     const double m_wave = p.rho_bulk * vp_peak * vp_peak;

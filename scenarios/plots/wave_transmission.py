@@ -101,6 +101,8 @@ if os.path.exists(summary_path):
                 axes[0].plot(dt, [travel(e) / t0 - 1 for e in pts], "o-", label=lab)
                 axes[1].plot(dt, [q_of(e) for e in pts], "o-", label=lab)
             rs = list(s.get("restitution_check", []))
+            if ref and isinstance(ref.get("restitution"), (int, float)):
+                rs.append(ref)
             if rs:
                 rs = sorted(rs, key=lambda e: e["restitution"])
                 axes[2].plot([e["restitution"] for e in rs], [q_of(e) for e in rs], "o-",
