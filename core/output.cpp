@@ -378,20 +378,28 @@ void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_nam
 
 // ---- plots -------------------------------------------------------------------------
 bool run_plot_script(const std::string& script, const std::string& h5, const std::string& outdir) {
+  const bool ok = run_python_script(script, {h5, outdir}, "charts");
+  if (!ok) std::cerr << "note: the data is in " << h5 << "\n";
+  return ok;
+}
+
+bool run_python_script(const std::string& script, const std::vector<std::string>& args,
+                       const std::string& what) {
   const std::string python = "/usr/bin/python3";
   std::string dir = GRANULAR_SOURCE_DIR "/scenarios/plots";
   if (const char* env = std::getenv("GRANULAR_PLOTS_DIR")) dir = env;
   const std::string path = dir + "/" + script;
   if (!fs::exists(python) || !fs::exists(path)) {
-    std::cerr << "note: charts skipped (" << (fs::exists(python) ? path : python)
-              << " not found); the data is in " << h5 << "\n";
+    std::cerr << "note: " << what << " skipped (" << (fs::exists(python) ? path : python)
+              << " not found)\n";
     return false;
   }
   // The interpreter is started directly with an argument vector: paths reach it as they are,
   // whatever quotes or shell syntax they hold (no shell ever parses them).
-  std::vector<std::string> args = {python, path, h5, outdir};
+  std::vector<std::string> all = {python, path};
+  all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
+  for (auto& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
   std::cout.flush();
   std::cerr.flush();
@@ -404,8 +412,7 @@ bool run_plot_script(const std::string& script, const std::string& h5, const std
     rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
   if (rc != 0) {
-    std::cerr << "warning: plotting script " << path << " failed (exit " << rc
-              << "); the data is in " << h5 << "\n";
+    std::cerr << "warning: " << what << " script " << path << " failed (exit " << rc << ")\n";
     return false;
   }
   return true;

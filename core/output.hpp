@@ -112,4 +112,10 @@ void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_nam
 // A missing interpreter or a failing script is reported, not fatal: the data is kept.
 bool run_plot_script(const std::string& script, const std::string& h5, const std::string& outdir);
 
+// Runs scenarios/plots/<script> (or $GRANULAR_PLOTS_DIR/<script>) with Debian's python3 and
+// `args`; returns whether it ran and exited with 0. `what` names the product in the note
+// printed when it could not run ("charts", "report").
+bool run_python_script(const std::string& script, const std::vector<std::string>& args,
+                       const std::string& what);
+
 }  // namespace granular

@@ -11,6 +11,7 @@
 #include "core/walls.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
+#include "scenarios/snapshot_series.hpp"
 
 namespace granular {
 
@@ -25,7 +26,8 @@ struct ImpactSetup {
   double angle = 0.0;  // incidence angle from the normal (radians): v = speed (sin, 0, -cos)
   double spin[3] = {0, 0, 0};  // initial angular velocity of the moving sphere
   double dt = 1e-3;
-  bool record = false;  // keep the time series
+  bool record = false;                  // keep the time series
+  SnapshotSeries* snapshots = nullptr;  // frames for ParaView (the series decides when)
 };
 
 struct ImpactResult {
@@ -122,8 +124,10 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
   const long max_steps =
       static_cast<long>(200.0 * M_PI * std::sqrt(r.reduced_mass / kmax) / s.dt) + 100000;
   double prev = k.overlap, t_start = -1, t_end = -1;
+  if (s.snapshots) s.snapshots->sample(sys);
   for (long step = 1; step <= max_steps; ++step) {
     sys.step(1);
+    if (s.snapshots) s.snapshots->sample(sys);
     k = kin();
     const double t = step * s.dt;
     const double fz = fh(0, 2), fx = fh(0, 0);
@@ -147,6 +151,7 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
     }
     prev = k.overlap;
   }
+  if (s.snapshots) s.snapshots->finish(sys);
   r.duration = r.separated ? t_end - t_start : 0.0;
   r.vn_out = -k.vn, r.vt_out = k.vt, r.vc_out = k.vc, r.spin_out = k.spin;
   r.restitution_normal = r.vn_in != 0 ? r.vn_out / r.vn_in : 0.0;

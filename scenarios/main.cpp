@@ -9,29 +9,16 @@
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "scenarios/moduli_theory.hpp"
+#include "scenarios/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace {
-
-std::string backends() {
-  std::string b;
-#ifdef KOKKOS_ENABLE_CUDA
-  b += " CUDA";
-#endif
-#ifdef KOKKOS_ENABLE_OPENMP
-  b += " OpenMP";
-#endif
-#ifdef KOKKOS_ENABLE_SERIAL
-  b += " Serial";
-#endif
-  return b.empty() ? b : b.substr(1);
-}
 
 std::string version_line() {
   const int v = KOKKOS_VERSION;
   return std::string("granular ") + GRANULAR_VERSION + "\nkokkos " + std::to_string(v / 10000) +
          "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
-         " backends: " + backends() +
+         " backends: " + granular::kokkos_backends() +
          "\ndefault execution space: " + Kokkos::DefaultExecutionSpace::name();
 }
 
@@ -120,11 +107,13 @@ int main(int argc, char** argv) {
     opts.resume = resume;
     opts.stop_after_minutes = stop_after_minutes;
     opts.check_only = checking;
-    entry.run(scene, opts);
-    if (checking)
+    if (checking) {
+      entry.run(scene, opts);
       std::cout << scene_path << ": every key read and checked (" << entry.name << ")\n";
-    else
+    } else {
+      granular::run_scene(entry, scene, opts);  // the driver, then the run record and report
       std::cout << "results in " << opts.out_dir << "\n";
+    }
   } catch (const granular::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     rc = 2;

@@ -8,6 +8,7 @@
 
 #include "core/progress.hpp"
 #include "scenarios/moduli_probing.hpp"
+#include "scenarios/run_report.hpp"
 
 namespace granular::moduli_study {
 
@@ -177,6 +178,8 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     }
     save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);
     write_text_file(ck.pointer(), std::to_string(k) + "\n");
+    report_progress("variant " + label + ": stage " + std::to_string(k + 1) + " of " +
+                    std::to_string(stages.size()) + " checkpointed");
     ck.remove(k - 1);
     if (stop()) return false;
   }

@@ -17,6 +17,7 @@
 #include "scenarios/dem_output.hpp"
 #include "scenarios/materials.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/snapshot_series.hpp"
 #include "scenarios/soft_models.hpp"
 #include "scenarios/wall_config.hpp"
 
@@ -34,6 +35,7 @@ struct Setup {
   double region_height = 0, gravity = 0, damping_time = 0, settle_ratio = 0, settle_max_time = 0;
   double strain = 0, wall_speed = 0, dt = 0, max_overlap = 0.6;
   long sample_every = 100;
+  long snapshot_every = 0;  // ParaView time series of each compression (0: none)
   double experiment_force = -1, experiment_strain = -1;
   std::vector<SoftModel> models;
 };
@@ -63,6 +65,7 @@ Setup read_setup(const SceneFile& s) {
   c.dt = s.real("compression.time_step");
   c.sample_every = s.integer("compression.sample_every", 100);
   c.max_overlap = s.real("run.max_overlap", 0.6);
+  c.snapshot_every = s.integer("output.snapshot_every", 0);
   c.experiment_force = s.real("compression.experiment_max_force", -1.0);
   c.experiment_strain = s.real("compression.experiment_strain", -1.0);
   c.models = read_soft_models(s, c.mats);
@@ -80,6 +83,7 @@ Setup read_setup(const SceneFile& s) {
   s.require(c.wall_speed > 0, "compression.wall_speed", "must be positive");
   s.require(c.dt > 0, "compression.time_step", "must be positive");
   s.require(c.sample_every >= 1, "compression.sample_every", "must be at least 1");
+  s.require(c.snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   s.require(c.fill.density > 0, "compression.particle_material", "needs a positive density");
   s.reject_unknown_keys();
   return c;
@@ -234,8 +238,11 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
     out.force.push_back(loads[5].force[2]);  // pushed up by the particles: positive
     out.max_force = std::max(out.max_force, loads[5].force[2]);
   };
+  // Frames at the first sample at or after every k steps, one series per model.
+  SnapshotSeries series(opts.out_dir, "snapshots_" + label, c.snapshot_every);
   const auto t0 = std::chrono::steady_clock::now();
   sample();
+  series.sample(sys);
   bool snapped = false;
   for (long s = 0; s < steps; s += c.sample_every) {
     sys.step(std::min(c.sample_every, steps - s));
@@ -248,6 +255,7 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
       break;
     }
     sample();
+    series.sample(sys);
     progress.update(sys.steps());
     if (snap && !snapped && sys.time() >= t_half) {  // the most compressed state
       write_state(*snap, "/snapshot", sys.particles(), sys.box(), c.fill.density);
@@ -263,6 +271,7 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
     }
   }
   out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  series.finish(sys);  // after the timing: the model's cost excludes the snapshot files
   out.steps = sys.steps();
   progress.finish();
   return out;

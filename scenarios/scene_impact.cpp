@@ -28,6 +28,7 @@ struct ImpactScene {
   double oblique_speed = 1;
   double spin = 0;  // about y, in units of v / R (negative: backspin against the motion)
   int steps_per_contact = 400;
+  long snapshot_every = 0;  // ParaView time series of each oblique impact (0: none)
 };
 
 ImpactScene read_scene(const SceneFile& s) {
@@ -46,12 +47,14 @@ ImpactScene read_scene(const SceneFile& s) {
   c.oblique_speed = s.real("impact.oblique_speed", c.speeds.back());
   c.spin = s.real("impact.spin", 0.0);
   c.steps_per_contact = static_cast<int>(s.integer("impact.steps_per_contact", 400));
+  c.snapshot_every = s.integer("output.snapshot_every", 0);
   s.require(c.radius > 0, "impact.diameter", "must be positive");
   s.require(c.wall || c.target_radius > 0, "impact.target_diameter", "must be positive");
   for (double v : c.speeds) s.require(v > 0, "impact.speeds", "must be positive");
   s.require(c.oblique_speed > 0, "impact.oblique_speed", "must be positive");
   for (double a : c.angles) s.require(a >= 0 && a < 90, "impact.angles_deg", "must lie in [0, 90)");
   s.require(c.steps_per_contact >= 50, "impact.steps_per_contact", "must be at least 50");
+  s.require(c.snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   s.require(c.materials.materials[c.sphere].density > 0, "impact.sphere_material",
             "needs a material with a positive density");
   s.require(c.wall || c.materials.materials[c.target].density > 0, "impact.target_material",
@@ -76,7 +79,8 @@ HertzClosedForm hertz_closed_form(double estar, double rstar, double mstar, doub
 
 template <class Model>
 ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, double angle_deg,
-                      bool record, double estar, double rstar, double mstar) {
+                      bool record, double estar, double rstar, double mstar,
+                      SnapshotSeries* snapshots = nullptr) {
   ImpactSetup s;
   s.wall = c.wall, s.wall_material = c.target;
   s.radius1 = c.radius, s.density1 = c.materials.materials[c.sphere].density;
@@ -88,6 +92,7 @@ ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, do
   const double vn = speed * std::cos(s.angle);
   s.dt = hertz_closed_form(estar, rstar, mstar, vn).duration / c.steps_per_contact;
   s.record = record;
+  s.snapshots = snapshots;
   return impact<Kokkos::DefaultExecutionSpace>(model, s);
 }
 
@@ -183,7 +188,9 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   with_material_model(mats, [&](const auto& model) {
     int k = 0;
     for (double a : c.angles) {
-      const ImpactResult r = run_case(model, c, v, a, true, estar, rstar, mstar);
+      SnapshotSeries snapshots(opts.out_dir, "snapshots_oblique_" + std::to_string(k),
+                               c.snapshot_every);
+      const ImpactResult r = run_case(model, c, v, a, true, estar, rstar, mstar, &snapshots);
       const double vn = r.vn_in, e = r.restitution_normal;
       // Gross sliding of a solid sphere on a wall (dem.md section 10): it slides for the
       // whole impact when |v_c| > (7/2) mu (1 + e) v_n; the tangential impulse is then

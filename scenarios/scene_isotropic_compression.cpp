@@ -15,6 +15,7 @@
 #include "scenarios/dem_output.hpp"
 #include "scenarios/packing.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/snapshot_series.hpp"
 
 namespace granular {
 
@@ -101,6 +102,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   // Stop as if interrupted after this many steps (0: never), leaving the checkpoint behind;
   // used to test that --resume reproduces an uninterrupted run.
   const long stop_after = scene.integer("run.stop_after", 0);
+  // ParaView time series: a frame at the first sample at or after every k steps (0: none).
+  const long snapshot_every = scene.integer("output.snapshot_every", 0);
   scene.require(gas.count >= 2, "particles.count", "must be at least 2");
   check_gas(scene, gas, "compression.phi_start");
   scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
@@ -110,6 +113,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   scene.require(sample_every > 0, "run.sample_every", "must be positive");
   scene.require(checkpoint_every > 0, "run.checkpoint_every", "must be positive");
   scene.require(relax_steps >= 0, "compression.relax_steps", "must not be negative");
+  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
 
   if (!begin_outputs(opts)) return;
@@ -176,8 +180,11 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
                         sys.particles().n);
   };
 
+  // A resumed run's series starts where it resumed; an interrupted one leaves none.
+  SnapshotSeries snapshots(opts.out_dir, "snapshots", snapshot_every);
   try {
     if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
+    snapshots.sample(sys);
     Progress progress("isotropic compression", total_steps - step0, opts.progress);
     while (sys.steps() < total_steps) {
       const bool compressing = sys.steps() < compress_steps;
@@ -190,6 +197,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       const Measurements m = sys.measure();
       sys.check_health(m);
       series.add(sys, m, d_mean, compressing ? 0 : 1);
+      snapshots.sample(sys);
       char extra[96];
       std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi,
                     m.pressure * d_mean / kn, m.z_corrected);
@@ -203,6 +211,11 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     }
   } catch (const PhysicsError&) {
     write_failure_snapshot();
+    try {  // the frames up to the failure show how it came about
+      snapshots.finish(sys);
+    } catch (const std::exception& e) {
+      std::cerr << "warning: snapshot series not written: " << e.what() << "\n";
+    }
     throw;
   }
 
@@ -216,6 +229,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state",
                       sys.particles().n);
+  snapshots.finish(sys);
 
   // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.
   const auto& phi = series.col.at("phi");

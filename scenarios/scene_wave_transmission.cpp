@@ -19,6 +19,7 @@
 #include "scenarios/box_fill.hpp"
 #include "scenarios/config_state.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/snapshot_series.hpp"
 #include "scenarios/wave_setup.hpp"
 
 namespace granular {
@@ -211,7 +212,8 @@ struct WaveRecord {
 
 template <class Model>
 WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& p,
-                        const PeriodicBox& box, double amplitude, double dt) {
+                        const PeriodicBox& box, double amplitude, double dt,
+                        SnapshotSeries* snapshots = nullptr) {
   WaveSetup wd = w;
   wd.dt = dt;
   DemSystem<Exec, Model> sys(particles_from<Exec>(p.state), box, model, params_of(wd, 0.0, 1.0));
@@ -269,11 +271,14 @@ WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& 
   const long steps = static_cast<long>(std::ceil(w.record_time / dt));
   const auto t0 = std::chrono::steady_clock::now();
   sample();
+  if (snapshots) snapshots->sample(sys);
   for (long st = 0; st < steps; st += every) {
     sys.step(every);
     sample();
+    if (snapshots) snapshots->sample(sys);
   }
   sys.check_health(sys.measure());
+  if (snapshots) snapshots->finish(sys);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
@@ -283,8 +288,9 @@ WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& 
 // regime pulse; both runs are deterministic, so the difference is the pulse's own response.
 template <class Model>
 WaveRecord transmit(const Model& model, const WaveSetup& w, const Prepared& p,
-                    const PeriodicBox& box, double amplitude, double dt) {
-  WaveRecord r = transmit_raw(model, w, p, box, amplitude, dt);
+                    const PeriodicBox& box, double amplitude, double dt,
+                    SnapshotSeries* snapshots = nullptr) {
+  WaveRecord r = transmit_raw(model, w, p, box, amplitude, dt, snapshots);
   const WaveRecord base = transmit_raw(model, w, p, box, 0.0, dt);
   for (int i = 0; i < r.force.size(); ++i) r.force.a[i] -= base.force.a[i];
   for (size_t k = 0; k < r.slabs.size(); ++k)
@@ -383,6 +389,10 @@ Json numerics_entry(const WaveRecord& r, const WaveSetup& w, const Prepared& p) 
 
 void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   const WaveSetup w = read_wave_setup(scene);
+  // ParaView time series of the reference pulse at each pressure (0: none): frames at the
+  // first receiver sample at or after every k steps.
+  const long snapshot_every = scene.integer("output.snapshot_every", 0);
+  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
   if (!begin_outputs(opts)) return;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -433,7 +443,10 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     for (size_t a = 0; a < w.amplitude_factors.size(); ++a) {
       const double amp = w.velocity * w.amplitude_factors[a];
       WaveRecord r;
-      with_material_model(w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt); });
+      SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
+                               a == 0 ? snapshot_every : 0);
+      with_material_model(
+          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
       const Picks pi = pick_travel_times(r.source, w.signals.picker);
       const Picks po = pick_travel_times(r.force, w.signals.picker);
       Json e = Json::object();

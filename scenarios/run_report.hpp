@@ -1,0 +1,36 @@
+// The record and the report of one run: wall time, machine and build go into summary.json
+// (member "run"), and scenarios/plots/report.py turns the output folder into report.html
+// (scene, parameters, results, every chart, links to the data), a static page that needs
+// no network. A missing python3 or a failing report script never fails the run.
+#pragma once
+#include <string>
+
+#include "core/output.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+// "OpenMP Serial", the Kokkos backends this build has.
+std::string kokkos_backends();
+
+// Wall time, dates, host, cores and threads, Kokkos and engine versions of a run that
+// started `wall_seconds` ago; `status` is "complete", "stopped", "failed" or "running".
+Json run_record(double wall_seconds, const std::string& status, const std::string& message);
+
+// Adds (or replaces) the member "run" of <dir>/summary.json; the file is rewritten whole.
+void record_run_in_summary(const std::string& dir, const Json& run);
+
+// Writes <dir>/report.html from what the folder holds now; false (with a note) when the
+// report could not be written.
+bool write_report(const std::string& dir, const Json& run);
+
+// Runs a scene as the CLI does: the driver, then the run record in summary.json and the
+// report. A run that stops early (a checkpoint, a failure) still gets a report saying so.
+void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts);
+
+// For long studies: rewrites the report of the run in progress with `status` (a stage just
+// finished), at most once every few seconds. Does nothing outside run_scene (tests calling
+// a driver directly).
+void report_progress(const std::string& status);
+
+}  // namespace granular
