@@ -1,5 +1,6 @@
 #include "core/master_equation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <unsupported/Eigen/MatrixFunctions>
@@ -128,13 +129,156 @@ Eigen::MatrixXd balance_columns(const Eigen::MatrixXd& Q) {
   return out;
 }
 
+namespace {
+
+// The integral-form data of one fit: per experiment s and sample i of the window,
+// D = e_s(t_i) - e_s(t_0) and J = integral of e_s from t_0 to t_i, and the elapsed time.
+struct IntegralData {
+  std::vector<Eigen::VectorXd> d, j, e0;
+  std::vector<double> elapsed;
+  std::vector<int> experiment;
+};
+
+IntegralData integral_form(const BandSeries& data, FitWindow w) {
+  IntegralData out;
+  const int B = static_cast<int>(data.series.size());
+  for (int s = 0; s < B; ++s) {
+    const Eigen::MatrixXd& e = data.series[s];
+    Eigen::VectorXd integral = Eigen::VectorXd::Zero(e.rows());
+    for (int i = w.first + 1; i <= w.last; ++i) {
+      integral += 0.5 * (data.times[i] - data.times[i - 1]) * (e.col(i) + e.col(i - 1));
+      out.d.push_back(e.col(i) - e.col(w.first));
+      out.j.push_back(integral);
+      out.e0.push_back(e.col(w.first));
+      out.elapsed.push_back(data.times[i] - data.times[w.first]);
+      out.experiment.push_back(s);
+    }
+  }
+  return out;
+}
+
+Eigen::MatrixXd with_balanced_diagonal(Eigen::MatrixXd X) {
+  X.diagonal().setZero();
+  for (Eigen::Index s = 0; s < X.cols(); ++s) X(s, s) = -X.col(s).sum();
+  return X;
+}
+
+// min 1/2 sum_k |D_k - Q J'_k|^2 over off-diagonal X >= 0, Q = X - diag(column sums of X),
+// with J'_k = J_k - elapsed_k f_s e0_k (s: the experiment of equation k); starts from X and returns
+// the iterations used.
+int fit_rates(const IntegralData& data, const Eigen::VectorXd& f, Eigen::MatrixXd& X) {
+  const Eigen::Index B = X.rows();
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(B, B), C = Eigen::MatrixXd::Zero(B, B);
+  for (size_t k = 0; k < data.d.size(); ++k) {
+    const Eigen::VectorXd jk = data.j[k] - data.elapsed[k] * f(data.experiment[k]) * data.e0[k];
+    A.noalias() += jk * jk.transpose();
+    C.noalias() += data.d[k] * jk.transpose();
+  }
+  // Q depends on X through a map of norm^2 <= B; the gradient is Lipschitz with B lambda_max(A).
+  const double lmax = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues().maxCoeff();
+  if (!(lmax > 0)) return 0;
+  const double step = 1.0 / (static_cast<double>(B) * lmax);
+  auto gradient = [&](const Eigen::MatrixXd& Y) {
+    const Eigen::MatrixXd G = with_balanced_diagonal(Y) * A - C;
+    Eigen::MatrixXd g(B, B);
+    for (Eigen::Index s = 0; s < B; ++s)
+      for (Eigen::Index r = 0; r < B; ++r) g(r, s) = r == s ? 0.0 : G(r, s) - G(s, s);
+    return g;
+  };
+  Eigen::MatrixXd prev = X, Y = X;
+  double t = 1;
+  const int max_iterations = 200000;
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    Eigen::MatrixXd next = (Y - step * gradient(Y)).cwiseMax(0.0);
+    next.diagonal().setZero();
+    const double change = (next - X).cwiseAbs().maxCoeff();
+    const double scale = std::max(next.cwiseAbs().maxCoeff(), 1e-300);
+    // Momentum is dropped whenever it points uphill (adaptive restart, O'Donoghue and
+    // Candes): the same minimum, reached in far fewer steps on ill-conditioned data.
+    if (((Y - next).array() * (next - X).array()).sum() > 0) t = 1;
+    const double t_next = 0.5 * (1 + std::sqrt(1 + 4 * t * t));
+    prev = X, X = next;
+    Y = X + ((t - 1) / t_next) * (X - prev);
+    t = t_next;
+    if (change <= 1e-12 * scale) break;
+  }
+  return it + 1;
+}
+
+double integral_rms(const IntegralData& data, const Eigen::MatrixXd& Q, const Eigen::VectorXd& f) {
+  double ss = 0;
+  long n = 0;
+  for (size_t k = 0; k < data.d.size(); ++k) {
+    const Eigen::VectorXd jk = data.j[k] - data.elapsed[k] * f(data.experiment[k]) * data.e0[k];
+    ss += (data.d[k] - Q * jk).squaredNorm(), n += data.d[k].size();
+  }
+  return n > 0 ? std::sqrt(ss / n) : 0.0;
+}
+
+}  // namespace
+
+GlobalFit fit_transfer_matrix_global(const BandSeries& data, FitWindow w, bool trapped) {
+  check_window(data, w);
+  const int B = static_cast<int>(data.series.size());
+  const IntegralData in = integral_form(data, w);
+  GlobalFit out;
+  out.trapped = Eigen::VectorXd::Zero(B);
+  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(B, B);
+  out.iterations = fit_rates(in, out.trapped, X);
+  // Trapped fractions: experiment s starts (almost) wholly in band s, so it traps f_s of its
+  // initial energy: D - Q J = -elapsed f_s Q e0. For fixed Q each f_s is a one-dimensional
+  // least-squares problem; alternate with the rates until f settles.
+  for (int round = 0; trapped && round < 100; ++round) {
+    const Eigen::MatrixXd Q = with_balanced_diagonal(X);
+    Eigen::VectorXd num = Eigen::VectorXd::Zero(B), den = Eigen::VectorXd::Zero(B);
+    for (size_t k = 0; k < in.d.size(); ++k) {
+      const int s = in.experiment[k];
+      const Eigen::VectorXd r = in.d[k] - Q * in.j[k];
+      const Eigen::VectorXd g = -in.elapsed[k] * (Q * in.e0[k]);
+      num(s) += r.dot(g), den(s) += g.squaredNorm();
+    }
+    Eigen::VectorXd f(B);
+    for (int s = 0; s < B; ++s) f(s) = den(s) > 0 ? std::clamp(num(s) / den(s), 0.0, 0.999) : 0.0;
+    const double change = (f - out.trapped).cwiseAbs().maxCoeff();
+    out.trapped = f;
+    out.iterations += fit_rates(in, out.trapped, X);
+    if (change < 1e-9) break;
+  }
+  out.Q = with_balanced_diagonal(X);
+  out.rms_residual = integral_rms(in, out.Q, out.trapped);
+  return out;
+}
+
 Eigen::MatrixXd solve_master_equation(const Eigen::MatrixXd& Q, const Eigen::VectorXd& e0,
                                       const std::vector<double>& times) {
   Eigen::MatrixXd out(Q.rows(), static_cast<Eigen::Index>(times.size()));
-  for (size_t i = 0; i < times.size(); ++i) {
+  const size_t T = times.size();
+  const double dt = T > 1 ? times[1] - times[0] : 0.0;
+  bool uniform = T > 2 && times[0] == 0.0 && dt > 0;
+  for (size_t i = 1; uniform && i < T; ++i)
+    uniform = std::abs(times[i] - i * dt) <= 1e-12 * times[i];
+  if (uniform) {
+    const Eigen::MatrixXd Qdt = Q * dt;
+    const Eigen::MatrixXd P = Qdt.exp();
+    out.col(0) = e0;
+    for (size_t i = 1; i < T; ++i)
+      out.col(static_cast<Eigen::Index>(i)) = P * out.col(static_cast<Eigen::Index>(i - 1));
+    return out;
+  }
+  for (size_t i = 0; i < T; ++i) {
     const Eigen::MatrixXd Qt = Q * times[i];
     out.col(static_cast<Eigen::Index>(i)) = Qt.exp() * e0;
   }
+  return out;
+}
+
+Eigen::MatrixXd solve_master_equation_trapped(const Eigen::MatrixXd& Q, const Eigen::VectorXd& f,
+                                              const Eigen::VectorXd& e0,
+                                              const std::vector<double>& times) {
+  const Eigen::VectorXd held = f.cwiseProduct(e0);
+  Eigen::MatrixXd out = solve_master_equation(Q, e0 - held, times);
+  out.colwise() += held;
   return out;
 }
 

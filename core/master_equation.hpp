@@ -31,9 +31,31 @@ Eigen::MatrixXd fit_transfer_matrix_linear(const BandSeries& data, FitWindow w);
 // conserve energy by itself; its forward predictions use this balanced form.
 Eigen::MatrixXd balance_columns(const Eigen::MatrixXd& Q);
 
-// e(t_i) = expm(Q t_i) e0 for every time.
+// Procedure 3 (global): all of Q at once, from every tone experiment over the window (the
+// whole horizon by default), by least squares on the band energies in integral form,
+// e_s(t_i) - e_s(t_0) = Q integral_{t_0}^{t_i} e_s dt (trapezoid rule), under the constraints
+// of a physical transfer matrix: off-diagonal rates >= 0 and columns summing to zero (each
+// diagonal entry is minus its column's gains: energy is conserved by construction). Solved
+// by accelerated projected gradient (FISTA) on the off-diagonal entries; deterministic.
+// With `trapped`, band r also holds a fraction f_r of its initial energy that never leaves
+// (weak localization), fitted jointly by alternating with Q:
+// e(t) = f∘e0 + expm(Q t) (e0 - f∘e0).
+struct GlobalFit {
+  Eigen::MatrixXd Q;
+  Eigen::VectorXd trapped;  // f_r, zeros without trapping
+  int iterations = 0;       // projected-gradient iterations, all rounds
+  double rms_residual = 0;  // of the integral-form equations
+};
+GlobalFit fit_transfer_matrix_global(const BandSeries& data, FitWindow w, bool trapped);
+
+// e(t_i) = expm(Q t_i) e0 for every time. On a uniform grid (t_i = i dt) one propagator
+// expm(Q dt) is applied step by step: O(B^2) per time instead of a matrix exponential.
 Eigen::MatrixXd solve_master_equation(const Eigen::MatrixXd& Q, const Eigen::VectorXd& e0,
                                       const std::vector<double>& times);
+// The trapped-fraction model: f∘e0 + expm(Q t_i) (e0 - f∘e0).
+Eigen::MatrixXd solve_master_equation_trapped(const Eigen::MatrixXd& Q, const Eigen::VectorXd& f,
+                                              const Eigen::VectorXd& e0,
+                                              const std::vector<double>& times);
 
 // Single-curve fits, exposed for tests: least-squares (y, z) of the model on (t, e).
 struct ExpFit {

@@ -207,13 +207,42 @@ void write_text_file(const std::string& path, const std::string& content) {
 }
 
 // ---- HDF5 --------------------------------------------------------------------------
+namespace {
+// Every HDF5 call's result is checked here and turned into an error that names the file
+// (and a reader asking for an optional dataset is not an error at all), so the library's
+// own error-stack dump would only repeat it. Switched off once, before the first file.
+void own_hdf5_errors() {
+  static const bool done = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)done;
+}
+}  // namespace
+
 H5Writer::H5Writer(std::string path) : path_(std::move(path)), partial_(partial_name(path_)) {
-  file_ = H5Fcreate(partial_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  own_hdf5_errors();
+  // The partial file is created now, so that an unwritable place fails before the run.
+  fd_ = ::open(partial_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0)
+    throw std::runtime_error("cannot create HDF5 file " + partial_ + ": " + std::strerror(errno));
+  // The file itself is built in memory (HDF5's core driver, no backing store) and written
+  // out by commit(): HDF5 never writes to disk, so a full disk is one checked write() here,
+  // never a file the library failed to close (Debian's HDF5 then crashes at exit, in its
+  // clean-up of that file).
+  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl < 0 || H5Pset_fapl_core(fapl, 1 << 20, 0) < 0) {
+    if (fapl >= 0) H5Pclose(fapl);
+    throw std::runtime_error("cannot set up the in-memory HDF5 file for " + partial_);
+  }
+  file_ = H5Fcreate(partial_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  H5Pclose(fapl);
   if (file_ < 0) throw std::runtime_error("cannot create HDF5 file " + partial_);
 }
 
 H5Writer::~H5Writer() {
-  if (file_ >= 0) H5Fclose(file_);
+  if (file_ >= 0) H5Fclose(file_);  // in memory: nothing reaches the disk
+  if (fd_ >= 0) ::close(fd_);
   if (!committed_) std::remove(partial_.c_str());
 }
 
@@ -287,21 +316,43 @@ void H5Writer::attribute(const std::string& object, const std::string& name,
 }
 
 void H5Writer::commit() {
-  // A failed flush or close (full disk, I/O error) leaves a file that would look whole:
-  // refuse it, remove the partial file, keep whatever complete file had the name before.
-  const herr_t flushed = H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  // The finished image, written with checked writes; any failure (full disk, I/O error)
+  // removes the partial file and keeps whatever complete file had the name before.
+  auto fail = [&](const std::string& why) {
+    if (file_ >= 0) H5Fclose(file_);
+    file_ = -1;
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    std::remove(partial_.c_str());
+    throw std::runtime_error("cannot complete HDF5 file " + partial_ + " (" + why + "); " + path_ +
+                             " was left as it was");
+  };
+  if (H5Fflush(file_, H5F_SCOPE_GLOBAL) < 0) fail("flush of the in-memory file failed");
+  const ssize_t size = H5Fget_file_image(file_, nullptr, 0);
+  if (size < 0) fail("no file image");
+  std::vector<char> image(static_cast<size_t>(size));
+  if (H5Fget_file_image(file_, image.data(), image.size()) != size) fail("no file image");
   const herr_t closed = H5Fclose(file_);
   file_ = -1;
-  if (flushed < 0 || closed < 0) {
-    std::remove(partial_.c_str());
-    throw std::runtime_error("cannot complete HDF5 file " + partial_ +
-                             " (disk full or I/O error); " + path_ + " was left as it was");
+  if (closed < 0) fail("close of the in-memory file failed");
+  size_t done = 0;
+  while (done < image.size()) {
+    const ssize_t n = ::write(fd_, image.data() + done, image.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(std::string("write failed: ") + std::strerror(n < 0 ? errno : ENOSPC));
+    done += static_cast<size_t>(n);
   }
+  if (::close(fd_) != 0) {
+    fd_ = -1;
+    fail(std::string("close failed: ") + std::strerror(errno));
+  }
+  fd_ = -1;
   commit_file(partial_, path_);
   committed_ = true;
 }
 
 H5Reader::H5Reader(const std::string& path) : path_(path) {
+  own_hdf5_errors();
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (file_ < 0) throw InputError("cannot open HDF5 file " + path);
 }

@@ -63,6 +63,8 @@ void write_text_file(const std::string& path, const std::string& content);
 void make_directories(const std::string& dir);
 
 // ---- HDF5 --------------------------------------------------------------------------
+// An HDF5 file that is whole or absent: built in memory (so it costs its size in memory
+// until commit), written to a hidden partial name, flushed to the device and renamed.
 class H5Writer {
  public:
   explicit H5Writer(std::string path);  // writes to partial_name(path)
@@ -83,6 +85,7 @@ class H5Writer {
   void write_raw(const std::string& name, hid_t type, const void* data, std::vector<hsize_t> dims);
   std::string path_, partial_;
   hid_t file_ = -1;
+  int fd_ = -1;  // the partial file, written by commit()
   bool committed_ = false;
 };
 

@@ -113,6 +113,20 @@ std::vector<double> chain_ensemble_mean(
   return std::vector<double>(h.data(), h.data() + N);
 }
 
+// One bead's column of a (R x N) field, realization by realization, on the host.
+template <class Space>
+std::vector<double> chain_bead_column(
+    const Kokkos::View<double**, Kokkos::LayoutRight, typename Space::memory_space>& field,
+    int bead) {
+  const int R = field.extent(0);
+  Kokkos::View<double*, typename Space::memory_space> column("chain::column", R);
+  Kokkos::parallel_for(
+      "chain::bead_column", Kokkos::RangePolicy<Space>(0, R),
+      KOKKOS_LAMBDA(const int r) { column(r) = field(r, bead); });
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), column);
+  return std::vector<double>(h.data(), h.data() + R);
+}
+
 // Stability of the time step: an estimate of the highest mode frequency from Gershgorin's
 // bound on M^{-1}(-K) (exact, 2 sqrt(3/2), for the ordered chain).
 template <class Space>

@@ -28,8 +28,8 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "machine_info.hpp"
-#include "scenarios/contact_config.hpp"
-#include "scenarios/dem_output.hpp"
+#include "scenarios/common/contact_config.hpp"
+#include "scenarios/common/dem_output.hpp"
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;

@@ -10,8 +10,8 @@
 #include "core/output.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
-#include "scenarios/dem_output.hpp"
-#include "scenarios/packing.hpp"
+#include "scenarios/common/dem_output.hpp"
+#include "scenarios/common/packing.hpp"
 
 namespace granular::perf {
 

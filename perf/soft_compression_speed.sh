@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Wall-clock cost of each force model in the confined compression of 514 hydrogel balls
-# (scenarios/confined_compression_hydrogel.toml), against the times the source study reports
+# (scenarios/soft/confined_compression_hydrogel.toml), against the times the source study reports
 # for the same scene: 304 s (classical Hertz), 1030 s (MC-stress), 2715 s (MC-strain).
 # Each repetition runs the whole scene (preparation, then one compression per model from
 # the same settled packing); the scene times every model's compression on its own.
@@ -28,7 +28,7 @@ trap 'rm -rf "$work"' EXIT
 for r in $(seq 1 "$reps"); do
   echo "[soft_compression] repetition $r of $reps" >&2
   OMP_PROC_BIND=spread OMP_PLACES=cores "$repo/build/bin/granular" run \
-    "$repo/scenarios/confined_compression_hydrogel.toml" --out "$work/rep$r" \
+    "$repo/scenarios/soft/confined_compression_hydrogel.toml" --out "$work/rep$r" \
     --threads "$threads" --quiet >&2
 done
 /usr/bin/python3 - "$work" "$reps" "$threads" "$out" <<'PY'
@@ -37,7 +37,7 @@ work, reps, threads, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.
 source = {"classical": 304.0, "mc_stress": 1030.0, "mc_strain": 2715.0}
 runs = [json.load(open(os.path.join(work, f"rep{r}", "summary.json"))) for r in range(1, reps + 1)]
 cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
-res = {"benchmark": "soft_compression", "scene": "scenarios/confined_compression_hydrogel.toml",
+res = {"benchmark": "soft_compression", "scene": "scenarios/soft/confined_compression_hydrogel.toml",
        "threads": threads, "repetitions": reps, "cpu_model": cpu, "hardware_threads": os.cpu_count(),
        "python": platform.python_version(), "preparation_wall_seconds":
        [r["preparation"]["wall_seconds"] for r in runs], "models": {}}

@@ -8,8 +8,8 @@
 #include "core/output.hpp"
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
-#include "scenarios/moduli_theory.hpp"
-#include "scenarios/run_report.hpp"
+#include "scenarios/common/run_report.hpp"
+#include "scenarios/moduli/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace {

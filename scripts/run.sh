@@ -4,6 +4,6 @@
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 "$repo/scripts/setup.sh"
-scene=${GRANULAR_SCENE:-$repo/scenarios/isotropic_compression.toml}
+scene=${GRANULAR_SCENE:-$repo/scenarios/packings/isotropic_compression.toml}
 cd "$repo"
 exec "${GRANULAR_BUILD:-$repo/build}/bin/granular" run "$scene" "$@"

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
-#include "scenarios/box_fill.hpp"
+#include "scenarios/common/box_fill.hpp"
 
 using namespace granular;
 

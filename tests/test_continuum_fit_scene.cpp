@@ -9,6 +9,7 @@
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
 
@@ -34,13 +35,13 @@ std::string error_of(const std::string& text, const std::string& name) {
 
 TEST(ContinuumFitScene, ShippedSceneFilesReadWithoutError) {
   for (const char* name : {"continuum_fit.toml", "continuum_fit_quick.toml"}) {
-    const std::string path = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name;
+    const std::string path = granular::testing::shipped_scene_path(name);
     EXPECT_EQ(error_of(read(path), path), "") << name;
   }
 }
 
 TEST(ContinuumFitScene, UnknownOrMissingKeyIsNamedWithTheFile) {
-  const std::string path = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/continuum_fit_quick.toml";
+  const std::string path = granular::testing::shipped_scene_path("continuum_fit_quick.toml");
   const std::string text = read(path);
   std::string typo = text;
   typo.insert(typo.find("[fit]\n") + 6, "z_minimum = 4.0\n");

@@ -7,7 +7,7 @@
 
 #include "exec_spaces.hpp"
 #include "kernels/contact_model.hpp"
-#include "scenarios/element_test.hpp"
+#include "scenarios/common/element_test.hpp"
 
 using namespace granular;
 

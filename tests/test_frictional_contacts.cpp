@@ -9,8 +9,8 @@
 
 #include "exec_spaces.hpp"
 #include "kernels/dem_system.hpp"
-#include "scenarios/packing.hpp"
-#include "scenarios/two_particle.hpp"
+#include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/packing.hpp"
 
 using namespace granular;
 

@@ -25,8 +25,8 @@ TEST(ImpactScene, ShippedGlassOnSteelReboundsAsItsClosedForms) {
   RunOptions opts;
   opts.out_dir = temp_dir("impact");
   opts.progress = false, opts.charts = false;
-  const SceneFile scene =
-      SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/impact_glass_wall.toml");
+  const SceneFile scene = SceneFile::load(std::string(GRANULAR_SOURCE_DIR) +
+                                          "/scenarios/collisions/impact_glass_wall.toml");
   ASSERT_EQ(scene.text("scene"), "impact");  // the CLI reads this key to pick the driver
   run_impact(scene, opts);
   const H5Reader r(opts.out_dir + "/results.h5");

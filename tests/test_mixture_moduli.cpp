@@ -5,12 +5,12 @@
 
 #include <cmath>
 
-#include "scenarios/element_test.hpp"
-#include "scenarios/mixture_materials.hpp"
-#include "scenarios/packing.hpp"
-#include "scenarios/power_law_fit.hpp"
-#include "scenarios/pressure_servo.hpp"
+#include "scenarios/common/element_test.hpp"
+#include "scenarios/common/packing.hpp"
+#include "scenarios/common/power_law_fit.hpp"
+#include "scenarios/common/pressure_servo.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/mixture_materials.hpp"
 #include "tests/test_support.hpp"
 
 using namespace granular;
@@ -126,6 +126,30 @@ TEST(PowerLawFit, RecoversExactPowerLaws) {
   EXPECT_NEAR(r.exponent_stderr, std::sqrt(6 * d * d / 2), 1e-12);
 }
 
+// The chains' near-source decay is fitted both ways over the same beads: each model must
+// recover its own law exactly and leave a clearly larger residual on the other's.
+TEST(PowerLawFit, ExponentialFitRecoversItsLawAndTellsItFromAPowerLaw) {
+  std::vector<double> d, ex, pw;
+  for (int k = 1; k <= 200; ++k) {
+    d.push_back(k);
+    ex.push_back(0.02 * std::exp(-0.05 * k));
+    pw.push_back(0.3 * std::pow(k, -1.7));
+  }
+  const PowerLawFit e = fit_exponential(d, ex);
+  EXPECT_EQ(e.points, 200);
+  EXPECT_NEAR(e.exponent, -0.05, 1e-14);
+  EXPECT_NEAR(e.prefactor, 0.02, 1e-14);
+  EXPECT_LT(e.rms_log_residual, 1e-12);
+  EXPECT_GT(fit_power_law(d, ex).rms_log_residual, 0.3);
+  EXPECT_NEAR(fit_power_law(d, pw).exponent, -1.7, 1e-13);
+  EXPECT_GT(fit_exponential(d, pw).rms_log_residual, 0.3);
+  // Abscissae of any sign; zero ordinates (no logarithm) are left out.
+  const PowerLawFit s =
+      fit_exponential({-1.0, 0.0, 1.0, 2.0}, {std::exp(0.5), 1.0, 0.0, std::exp(-1.0)});
+  EXPECT_EQ(s.points, 3);
+  EXPECT_NEAR(s.exponent, -0.5, 1e-14);
+}
+
 TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
   // 250 glass beads (d = 3.8-4.2 mm), the study's contact law and time step.
   const MixtureModel model = read_materials("harmonic").model();
@@ -162,7 +186,7 @@ TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
 
 TEST(MixtureModuliScene, ShippedSceneFilesRead) {
   for (const char* name : {"mixture_moduli.toml", "mixture_moduli_quick.toml"}) {
-    const SceneFile s = SceneFile::load(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+    const SceneFile s = SceneFile::load(granular::testing::shipped_scene_path(name));
     EXPECT_EQ(s.text("scene"), "mixture_moduli");
     EXPECT_NO_THROW(check_mixture_moduli(s)) << name;
   }

@@ -11,17 +11,16 @@
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
 
 TEST(ModuliSceneFiles, EveryShippedElasticModuliSceneReadsWithoutError) {
   int checked = 0;
-  for (const auto& e :
-       std::filesystem::directory_iterator(std::string(GRANULAR_SOURCE_DIR) + "/scenarios")) {
-    if (e.path().extension() != ".toml") continue;
-    const SceneFile s = SceneFile::load(e.path().string());
+  for (const auto& path : granular::testing::shipped_scene_files()) {
+    const SceneFile s = SceneFile::load(path.string());
     if (s.text("scene") != "elastic_moduli") continue;
-    EXPECT_NO_THROW(check_elastic_moduli(s)) << e.path();
+    EXPECT_NO_THROW(check_elastic_moduli(s)) << path;
     ++checked;
   }
   EXPECT_GE(checked, 10);  // five studies, quick and full
@@ -29,7 +28,7 @@ TEST(ModuliSceneFiles, EveryShippedElasticModuliSceneReadsWithoutError) {
 
 // A value the driver cannot use stops the run before any work, naming the key and the file.
 TEST(ModuliSceneFiles, UnsupportedProbeOrientationsNamesKeyAndFile) {
-  const std::string path = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/moduli_linear_quick.toml";
+  const std::string path = granular::testing::shipped_scene_path("moduli_linear_quick.toml");
   std::ifstream f(path);
   std::stringstream ss;
   ss << f.rdbuf();

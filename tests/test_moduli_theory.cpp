@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "scenarios/moduli_theory.hpp"
+#include "scenarios/moduli/moduli_theory.hpp"
 
 using granular::moduli_theory;
 using granular::TheoryInput;

@@ -14,7 +14,7 @@
 #include "kernels/dem_system.hpp"
 #include "kernels/neighbor_list.hpp"
 #include "kernels/strain.hpp"
-#include "scenarios/packing.hpp"
+#include "scenarios/common/packing.hpp"
 
 using namespace granular;
 

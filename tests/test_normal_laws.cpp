@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "exec_spaces.hpp"
-#include "scenarios/two_particle.hpp"
+#include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;
 

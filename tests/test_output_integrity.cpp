@@ -4,9 +4,11 @@
 // hands paths to the interpreter as they are, so a hostile directory name runs nothing.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -85,6 +87,43 @@ TEST(OutputIntegrity, HdfFileThatCannotBeWrittenWholeLeavesThePreviousOneInPlace
   }
   EXPECT_TRUE(failed) << "a write past the space left must fail";
   EXPECT_EQ(H5Reader(path).reals("/a"), (std::vector<double>{1, 2, 3}));
+  EXPECT_FALSE(fs::exists(partial_name(path)));
+  fs::remove_all(dir);
+}
+
+// When the space never comes back, the run reports the failure naming the file, and the
+// process must still end normally: a file HDF5 itself failed to write and close stayed open
+// inside the library, whose clean-up at exit then crashed (SIGSEGV). A child process, so
+// that the library's exit really runs, with the file-size limit kept to the end.
+TEST(OutputIntegrity, DiskThatStaysFullGivesOneClearErrorAndNoLibraryDumpAtExit) {
+  const auto dir = fresh_dir("h5_stays_full");
+  const std::string path = (dir / "results.h5").string();
+  const fs::path err = dir / "stderr.txt";
+  std::fflush(nullptr);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (!std::freopen(err.c_str(), "w", stderr)) std::_Exit(3);
+    FileSizeLimit limit(64 * 1024);  // kept until exit: the disk stays full
+    try {
+      H5Writer w(path);
+      w.write("/a", std::vector<double>(1 << 17, 7.0));
+      w.commit();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "run error: %s\n", e.what());
+      std::exit(0);  // the normal exit path, with the library's clean-up
+    }
+    std::exit(4);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child died of signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "4: the write did not fail; 3: no stderr file";
+  const std::string text = read_text(err);
+  EXPECT_NE(text.find("run error: "), std::string::npos) << text;
+  EXPECT_NE(text.find(dir.string()), std::string::npos) << text;
+  EXPECT_EQ(text.find("HDF5-DIAG"), std::string::npos) << text;  // the library's dump
+  EXPECT_FALSE(fs::exists(path));
   EXPECT_FALSE(fs::exists(partial_name(path)));
   fs::remove_all(dir);
 }

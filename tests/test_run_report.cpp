@@ -13,7 +13,7 @@
 #include "core/error.hpp"
 #include "core/scene_file.hpp"
 #include "external_program.hpp"
-#include "scenarios/run_report.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "test_support.hpp"
 

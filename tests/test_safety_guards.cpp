@@ -8,7 +8,7 @@
 #include "core/output.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
-#include "scenarios/packing.hpp"
+#include "scenarios/common/packing.hpp"
 #include "tests/test_support.hpp"
 
 using namespace granular;

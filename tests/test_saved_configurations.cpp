@@ -10,10 +10,10 @@
 #include <sstream>
 
 #include "core/output.hpp"
-#include "scenarios/config_state.hpp"
-#include "scenarios/element_test.hpp"
-#include "scenarios/moduli_outputs.hpp"
-#include "scenarios/packing.hpp"
+#include "scenarios/common/config_state.hpp"
+#include "scenarios/common/element_test.hpp"
+#include "scenarios/common/packing.hpp"
+#include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"
 

@@ -171,9 +171,7 @@ Outcome check_text(const std::string& text, const std::string& path, std::string
 
 std::vector<std::string> shipped_scene_files() {
   std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(fs::path(GRANULAR_SOURCE_DIR) / "scenarios"))
-    if (e.path().extension() == ".toml") files.push_back(e.path().string());
-  std::sort(files.begin(), files.end());
+  for (const auto& path : granular::testing::shipped_scene_files()) files.push_back(path.string());
   return files;
 }
 

@@ -15,9 +15,9 @@
 #include "core/scene_file.hpp"
 #include "external_program.hpp"
 #include "kernels/contact_model.hpp"
-#include "scenarios/impact.hpp"
+#include "scenarios/collisions/impact.hpp"
+#include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
-#include "scenarios/snapshot_series.hpp"
 #include "test_support.hpp"
 
 using namespace granular;

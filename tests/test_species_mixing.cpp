@@ -6,7 +6,7 @@
 
 #include "exec_spaces.hpp"
 #include "kernels/species_mixing.hpp"
-#include "scenarios/two_particle.hpp"
+#include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;
 

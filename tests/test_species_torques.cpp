@@ -13,7 +13,7 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "kernels/species_mixing.hpp"
-#include "scenarios/two_particle.hpp"
+#include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;
 

@@ -8,7 +8,7 @@
 
 #include "core/output.hpp"
 #include "core/particles.hpp"
-#include "scenarios/dem_output.hpp"
+#include "scenarios/common/dem_output.hpp"
 #include "tests/test_support.hpp"
 
 using namespace granular;

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "granular_config.hpp"
 
@@ -34,9 +36,32 @@ inline std::string read_text(const std::string& path) {
   return ss.str();
 }
 
-// The text of scenarios/<name> in the source tree.
+// Every shipped scene file: the *.toml of the family folders scenarios/<family>/.
+inline std::vector<std::filesystem::path> shipped_scene_files() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  for (const auto& family : fs::directory_iterator(fs::path(GRANULAR_SOURCE_DIR) / "scenarios")) {
+    if (!family.is_directory()) continue;
+    for (const auto& e : fs::directory_iterator(family.path()))
+      if (e.path().extension() == ".toml") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// The path of the shipped file scenarios/<family>/<name>, whichever family holds it ("" when
+// none does, so that the caller's load fails naming the file).
+inline std::string shipped_scene_path(const std::string& name) {
+  namespace fs = std::filesystem;
+  for (const auto& family : fs::directory_iterator(fs::path(GRANULAR_SOURCE_DIR) / "scenarios"))
+    if (family.is_directory() && fs::exists(family.path() / name))
+      return (family.path() / name).string();
+  return std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name;
+}
+
+// The text of a shipped scene file.
 inline std::string shipped_scene(const std::string& name) {
-  return read_text(std::string(GRANULAR_SOURCE_DIR) + "/scenarios/" + name);
+  return read_text(shipped_scene_path(name));
 }
 
 // Replaces the first occurrence of `from` in `text` (a mutated scene file); a test whose

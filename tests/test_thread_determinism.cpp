@@ -22,7 +22,7 @@
 
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
-#include "scenarios/packing.hpp"
+#include "scenarios/common/packing.hpp"
 
 using namespace granular;
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "exec_spaces.hpp"
-#include "scenarios/two_particle.hpp"
+#include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;
 

@@ -10,7 +10,7 @@
 #include "core/walls.hpp"
 #include "exec_spaces.hpp"
 #include "kernels/dem_system.hpp"
-#include "scenarios/impact.hpp"
+#include "scenarios/collisions/impact.hpp"
 
 using namespace granular;
 

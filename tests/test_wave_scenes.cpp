@@ -37,10 +37,10 @@ double json_number(const std::string& json, const std::string& key, const std::s
 
 TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
   std::string text = shipped_scene("signal_analysis_traces.toml");
-  const std::string src = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/";
-  replace_once(text, "\"scenarios/signal_example_trace1.csv\"",
+  const std::string src = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/waves/";
+  replace_once(text, "\"scenarios/waves/signal_example_trace1.csv\"",
                "\"" + src + "signal_example_trace1.csv\"");
-  replace_once(text, "\"scenarios/signal_example_trace2.csv\"",
+  replace_once(text, "\"scenarios/waves/signal_example_trace2.csv\"",
                "\"" + src + "signal_example_trace2.csv\"");
   RunOptions opts;
   opts.out_dir = temp_dir("signal_traces");

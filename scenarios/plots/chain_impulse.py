@@ -14,9 +14,12 @@ with h5py.File(h5, "r") as f:
     data = []
     for g in runs:
         d = f[g]
-        data.append(dict(xi=float(d.attrs["xi"]), t=d["time"][:], te=d["te_mean"][:] / e0,
+        a = {k: float(v) for k, v in d.attrs.items()}
+        data.append(dict(xi=a["xi"], t=d["time"][:], te=d["te_mean"][:] / e0,
                          R=d["centre_mean"][:] - src, r2=d["width2_mean"][:],
-                         source=d["source_energy"][:] / e0))
+                         source=d["source_energy"][:] / e0,
+                         ratio=d["source_fraction_per_realization"][:],
+                         end=int(a["analysis_end_sample"]), fit=a))
 
 # 1. Energy profiles at four times, one panel per xi.
 fig, axes = plt.subplots(1, len(data), figsize=(3.4 * len(data), 3.2), squeeze=False, sharey=True)
@@ -32,30 +35,63 @@ axes[0][0].set_ylabel("<TE_p> / E0")
 axes[0][0].legend(fontsize=7)
 save(fig, outdir, "energy_profiles.png")
 
-# 2. Near-source decay at the last time.
-fig, ax = plt.subplots(figsize=(4.5, 3.4))
-for d in data:
+# 2. Near-source decay at the end of the analysis window (before the reflection): the first
+# beads with their exponential fit, and the long range on log-log axes with a power law and
+# an exponential fitted over the same beads.
+fig, (a1, a2) = plt.subplots(1, 2, figsize=(9, 3.4))
+for k, d in enumerate(data):
+    c = f"C{k}"
+    prof = d["te"][d["end"]]
     p = np.arange(0, min(80, n - src))
-    ax.semilogy(p, np.maximum(d["te"][-1][src + p], 1e-14), marker=".", ms=3, lw=0.8,
+    a1.semilogy(p, np.maximum(prof[src + p], 1e-14), ".", ms=3, color=c,
                 label=f"xi = {d['xi']:g}")
-ax.set_xlabel("distance from the source (beads)")
-ax.set_ylabel("<TE_p>(t_max) / E0")
-ax.set_title("near-source (localized) energy")
-ax.legend(fontsize=7)
+    f = d["fit"]
+    pn = np.arange(0, int(f["near_beads"]))
+    if np.isfinite(f["near_exponential_rate"]):
+        a1.semilogy(pn, f["near_exponential_prefactor"] * np.exp(f["near_exponential_rate"] * pn),
+                    "-", lw=0.8, color=c)
+    q = np.arange(1, min(int(f["far_beads"]), n - 1 - src) + 1)
+    a2.loglog(q, np.maximum(prof[src + q], 1e-14), ".", ms=2, color=c, label=f"xi = {d['xi']:g}")
+    if d["xi"] > 0 and np.isfinite(f["far_power_law_exponent"]):
+        a2.loglog(q, f["far_power_law_prefactor"] * q ** f["far_power_law_exponent"], "-",
+                  lw=0.9, color=c)
+        a2.loglog(q, f["far_exponential_prefactor"] * np.exp(f["far_exponential_rate"] * q),
+                  ":", lw=0.9, color=c)
+a1.set_xlabel("distance from the source (beads)")
+a1.set_ylabel("<TE_p> / E0 at the window's end")
+a1.set_title("near the source: exponential fit")
+a1.set_ylim(bottom=1e-12)
+a1.legend(fontsize=7)
+a2.set_xlabel("distance from the source (beads)")
+a2.set_title("long range: power law (solid), exponential (dotted)")
+a2.set_ylim(bottom=1e-12)
 save(fig, outdir, "near_source_decay.png")
 
-# 3. Energy on the source bead against time, and its late-time value against xi.
+# 3. Energy on the source bead against time (to the window's end), and its late-time value
+# against xi, on log-log axes, both as a ratio of ensemble means and per realization.
 fig, (a1, a2) = plt.subplots(1, 2, figsize=(8, 3.3))
-for d in data:
-    a1.semilogy(d["t"], np.maximum(d["source"], 1e-12), lw=0.9, label=f"xi = {d['xi']:g}")
+xi, late, late_ratio = [], [], []
+for k, d in enumerate(data):
+    e = d["end"]
+    a1.semilogy(d["t"][:e + 1], np.maximum(d["source"][:e + 1], 1e-12), lw=0.9, color=f"C{k}",
+                label=f"xi = {d['xi']:g}")
+    a1.semilogy(d["t"][:e + 1], np.maximum(d["ratio"][:e + 1], 1e-12), "--", lw=0.7,
+                color=f"C{k}")
+    tail = max(1, e // 10)
+    if d["xi"] > 0:
+        xi.append(d["xi"])
+        late.append(np.mean(d["source"][e - tail + 1:e + 1]))
+        late_ratio.append(np.mean(d["ratio"][e - tail + 1:e + 1]))
 a1.set_xlabel("t")
-a1.set_ylabel("<TE_source> / E0")
+a1.set_ylabel("source energy / E0")
+a1.set_title("solid <TE>/<E0>, dashed <TE/E0>", fontsize=9)
 a1.legend(fontsize=7)
-xi = [d["xi"] for d in data]
-late = [np.mean(d["source"][-max(1, len(d["source"]) // 10):]) for d in data]
-a2.plot(xi, late, "o-")
+if xi:
+    a2.loglog(xi, late, "o-", label="<TE_source> / (v0^2/2)")
+    a2.loglog(xi, late_ratio, "s--", label="<TE_source / (b_source v0^2/2)>")
+    a2.legend(fontsize=7)
 a2.set_xlabel("disorder xi")
-a2.set_ylabel("residual source energy / E0")
+a2.set_ylabel("residual source energy fraction")
 save(fig, outdir, "source_residual.png")
 
 # 4. Centre of energy and squared width.

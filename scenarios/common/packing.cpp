@@ -1,0 +1,109 @@
+// Random gas generator (see packing.hpp). Host code: it runs once per scene.
+#include "scenarios/common/packing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/rng.hpp"
+
+namespace granular {
+
+HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
+  if (s.count < 1) throw InputError("particle count must be positive");
+  if (!(s.diameter_min > 0) || s.diameter_max < s.diameter_min)
+    throw InputError("diameters must satisfy 0 < diameter_min <= diameter_max");
+  if (!(s.phi > 0) || s.phi > 0.45)
+    throw InputError("gas volume fraction must be in (0, 0.45]: random insertion jams above");
+  const int n = s.count;
+  HostParticles h;
+  h.resize(n);
+  double vol = 0.0;
+  for (int i = 0; i < n; ++i) {
+    Stream st(s.seed, static_cast<std::uint64_t>(i));
+    const double d = st.uniform(s.diameter_min, s.diameter_max);
+    h.radius[i] = 0.5 * d;
+    h.density[i] = s.density;
+    vol += M_PI / 6.0 * d * d * d;
+    h.vx[i] = s.speed * st.normal();
+    h.vy[i] = s.speed * st.normal();
+    h.vz[i] = s.speed * st.normal();
+  }
+  const double edge = std::cbrt(vol / s.phi);
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = edge;
+
+  // Zero total momentum, so the gas does not drift through the box.
+  double p[3] = {0, 0, 0}, mtot = 0;
+  for (int i = 0; i < n; ++i) {
+    const double m = h.density[i] * std::pow(h.radius[i], 3);
+    p[0] += m * h.vx[i], p[1] += m * h.vy[i], p[2] += m * h.vz[i];
+    mtot += m;
+  }
+  for (int i = 0; i < n; ++i)
+    h.vx[i] -= p[0] / mtot, h.vy[i] -= p[1] / mtot, h.vz[i] -= p[2] / mtot;
+
+  // Grid hash with cells no smaller than the largest diameter.
+  const int nc = std::max(1, static_cast<int>(edge / s.diameter_max));
+  const double cl = edge / nc;
+  std::vector<std::vector<int>> cells(static_cast<size_t>(nc) * nc * nc);
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return h.radius[a] > h.radius[b]; });
+  const PeriodicBox b = box;
+  for (int i : order) {
+    Stream st(s.seed ^ 0x5bd1e995ULL, static_cast<std::uint64_t>(i));
+    bool placed = false;
+    for (int attempt = 0; attempt < 100000 && !placed; ++attempt) {
+      const double x = st.uniform(0, edge), y = st.uniform(0, edge), z = st.uniform(0, edge);
+      const int cx = std::min(nc - 1, static_cast<int>(x / cl));
+      const int cy = std::min(nc - 1, static_cast<int>(y / cl));
+      const int cz = std::min(nc - 1, static_cast<int>(z / cl));
+      bool ok = true;
+      for (int dz = -1; dz <= 1 && ok; ++dz)
+        for (int dy = -1; dy <= 1 && ok; ++dy)
+          for (int dx = -1; dx <= 1 && ok; ++dx) {
+            const int c =
+                (((cz + dz + nc) % nc) * nc + (cy + dy + nc) % nc) * nc + (cx + dx + nc) % nc;
+            for (int j : cells[c]) {
+              const double rx = b.min_image(x - h.x[j], 0), ry = b.min_image(y - h.y[j], 1),
+                           rz = b.min_image(z - h.z[j], 2);
+              const double sum = h.radius[i] + h.radius[j];
+              if (rx * rx + ry * ry + rz * rz < sum * sum) {
+                ok = false;
+                break;
+              }
+            }
+          }  // with fewer than 3 cells per axis some cells are checked twice: harmless
+      if (!ok) continue;
+      h.x[i] = x, h.y[i] = y, h.z[i] = z;
+      cells[(cz * nc + cy) * nc + cx].push_back(i);
+      placed = true;
+    }
+    if (!placed)
+      throw InputError("could not insert particle " + std::to_string(i) +
+                       " without overlap at phi = " + std::to_string(s.phi) +
+                       ": lower the gas volume fraction");
+  }
+  return h;
+}
+
+void check_gas(const SceneFile& scene, const GasSpec& g, const std::string& phi_key) {
+  scene.require(g.diameter_min > 0, "particles.diameter_min", "must be positive");
+  scene.require(g.diameter_max >= g.diameter_min && g.diameter_max <= 100 * g.diameter_min,
+                "particles.diameter_max",
+                "must lie between particles.diameter_min and 100 times it (the neighbour grid "
+                "is sized by the largest particle)");
+  scene.require(g.density > 0, "particles.density", "must be positive");
+  scene.require(g.speed >= 0, "particles.initial_speed", "must not be negative");
+  scene.require(g.phi >= 1e-3 && g.phi <= 0.5, phi_key, "must lie in [0.001, 0.5]");
+  // The box edge (N V_max / phi)^(1/3) and its volume must stay finite.
+  const double v_max = M_PI / 6 * g.diameter_max * g.diameter_max * g.diameter_max;
+  scene.require(std::isfinite(v_max * g.count / g.phi), "particles.diameter_max",
+                "is too large: the box volume overflows");
+}
+
+}  // namespace granular

@@ -1,0 +1,216 @@
+// Run record in summary.json and report.html (see run_report.hpp).
+#include "scenarios/common/run_report.hpp"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <Kokkos_Core.hpp>
+#include <cctype>
+#include <chrono>
+#include <cstdint>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "core/error.hpp"
+#include "granular_config.hpp"
+
+namespace granular {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string utc_text(std::time_t t) {
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// The processor's model name as Linux reports it ("" elsewhere): timings in a report mean
+// little without it.
+std::string cpu_model() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
+    }
+  return "";
+}
+
+// The run in progress under run_scene, for report_progress (one run per process at a time:
+// the CLI runs one scene).
+struct ActiveRun {
+  bool on = false;
+  std::string dir, scene, scene_file;
+  std::chrono::steady_clock::time_point start, last_report;
+};
+ActiveRun& active_run() {
+  static ActiveRun run;
+  return run;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// What identifies one version of summary.json, to tell whether the run rewrote it.
+struct FileStamp {
+  bool exists = false;
+  fs::file_time_type time{};
+  std::uintmax_t size = 0;
+  bool operator==(const FileStamp& o) const {
+    return exists == o.exists && time == o.time && size == o.size;
+  }
+};
+FileStamp stamp(const std::string& path) {
+  FileStamp s;
+  std::error_code ec;
+  s.time = fs::last_write_time(path, ec);
+  if (ec) return s;
+  s.size = fs::is_directory(path, ec) ? 0 : fs::file_size(path, ec);
+  s.exists = !ec;
+  return s;
+}
+
+}  // namespace
+
+std::string kokkos_backends() {
+  std::string b;
+#ifdef KOKKOS_ENABLE_CUDA
+  b += " CUDA";
+#endif
+#ifdef KOKKOS_ENABLE_OPENMP
+  b += " OpenMP";
+#endif
+#ifdef KOKKOS_ENABLE_SERIAL
+  b += " Serial";
+#endif
+  return b.empty() ? b : b.substr(1);
+}
+
+Json run_record(double wall_seconds, const std::string& status, const std::string& message) {
+  Json r = Json::object();
+  r["status"] = status;
+  if (!message.empty()) r["message"] = message;
+  r["wall_time_s"] = wall_seconds;
+  const std::time_t now = std::time(nullptr);
+  r["started_utc"] = utc_text(now - static_cast<std::time_t>(wall_seconds + 0.5));
+  r["finished_utc"] = utc_text(now);
+  char host[256] = {0};
+  if (::gethostname(host, sizeof host - 1) != 0) host[0] = 0;
+  r["hostname"] = std::string(host);
+  struct utsname u {};
+  if (::uname(&u) == 0) r["system"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  r["cpu"] = cpu_model();
+  r["cores"] = static_cast<int>(std::thread::hardware_concurrency());
+  if (Kokkos::is_initialized())
+    r["threads"] = static_cast<int>(Kokkos::DefaultHostExecutionSpace().concurrency());
+  r["execution_space"] = Kokkos::DefaultExecutionSpace::name();
+  const int v = KOKKOS_VERSION;
+  r["kokkos_version"] = std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." +
+                        std::to_string(v % 100);
+  r["kokkos_backends"] = kokkos_backends();
+  r["granular_version"] = GRANULAR_VERSION;
+  return r;
+}
+
+void record_run_in_summary(const std::string& dir, const Json& run) {
+  const std::string path = dir + "/summary.json";
+  std::ifstream f(path);
+  if (!f) return;
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string text = ss.str();
+  // Drivers write summary.json with Json::dump: one object, two-space indent, members one
+  // per line. JSON is not parsed back here (the builder has no reader); the member is added
+  // before the closing brace, and an earlier "run" member (always the last) is cut first.
+  const auto earlier = text.find("\n  \"run\": ");
+  if (earlier != std::string::npos) text.erase(earlier), text += "\n}";
+  const auto close = text.find_last_of('}');
+  if (close == std::string::npos) return;
+  text.erase(close);
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
+  if (text.empty()) return;
+  if (text.back() == ',') text.pop_back();
+  std::string member = run.dump(2);
+  while (!member.empty() && member.back() == '\n') member.pop_back();
+  std::string indented;
+  for (char c : member) indented += c == '\n' ? std::string("\n  ") : std::string(1, c);
+  text += std::string(text.back() == '{' ? "" : ",") + "\n  \"run\": " + indented + "\n}\n";
+  write_text_file(path, text);
+}
+
+bool write_report(const std::string& dir, const Json& run) {
+  try {
+    return run_python_script("report.py", {dir, run.dump(0)}, "report");
+  } catch (const std::exception& e) {
+    std::cerr << "warning: report not written: " << e.what() << "\n";
+    return false;
+  }
+}
+
+void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts) {
+  const std::string summary = opts.out_dir + "/summary.json";
+  const FileStamp before = stamp(summary);
+  // Every output file is renamed into place, which changes the folder's time: a run that
+  // leaves it unchanged wrote nothing (refused input, a check of the scene file) and gets
+  // no report, so an earlier run's report stays as it was.
+  const FileStamp folder_before = stamp(opts.out_dir);
+  ActiveRun& run = active_run();
+  run.on = true;
+  run.dir = opts.out_dir;
+  run.scene = entry.name;
+  run.scene_file = scene.path();
+  run.start = std::chrono::steady_clock::now();
+  run.last_report = run.start - std::chrono::hours(1);
+  auto finish = [&](const std::string& status, const std::string& message) {
+    run.on = false;
+    if (!fs::is_directory(opts.out_dir) || stamp(opts.out_dir) == folder_before) return;
+    Json rec = run_record(seconds_since(run.start), status, message);
+    rec["scene"] = run.scene;
+    rec["scene_file"] = run.scene_file;
+    const bool fresh = !(stamp(summary) == before) && stamp(summary).exists;
+    rec["summary_from_this_run"] = fresh;
+    try {
+      if (fresh) record_run_in_summary(opts.out_dir, rec);
+    } catch (const std::exception& e) {
+      std::cerr << "warning: run record not added to " << summary << ": " << e.what() << "\n";
+    }
+    write_report(opts.out_dir, rec);
+  };
+  try {
+    entry.run(scene, opts);
+  } catch (const InputError&) {
+    run.on = false;  // refused before it ran: an older report in the folder stays as it was
+    throw;
+  } catch (const std::exception& e) {
+    finish("failed", e.what());
+    throw;
+  }
+  if (stamp(summary) == before)
+    finish("stopped",
+           "the run stopped before its end (a checkpoint is kept): continue it with --resume");
+  else
+    finish("complete", "");
+}
+
+void report_progress(const std::string& status) {
+  ActiveRun& run = active_run();
+  // A stage can be seconds long in a quick study: one report every few seconds is plenty.
+  if (!run.on || seconds_since(run.last_report) < 10.0) return;
+  run.last_report = std::chrono::steady_clock::now();
+  Json rec = run_record(seconds_since(run.start), "running", status);
+  rec["scene"] = run.scene;
+  rec["scene_file"] = run.scene_file;
+  rec["summary_from_this_run"] = false;
+  write_report(run.dir, rec);
+}
+
+}  // namespace granular

@@ -1,0 +1,111 @@
+// Snapshot time series for ParaView (see snapshot_series.hpp).
+#include "scenarios/common/snapshot_series.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+namespace granular {
+
+std::string snapshot_group(long step) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "/step_%08ld", step);
+  return buf;
+}
+
+SnapshotSeries::SnapshotSeries(std::string dir, std::string name, long every)
+    : dir_(std::move(dir)), name_(std::move(name)), every_(every > 0 ? every : 0) {}
+
+// An unfinished series (the run stopped or failed) leaves nothing: H5Writer removes its
+// temporary file, and no XDMF file was written.
+SnapshotSeries::~SnapshotSeries() = default;
+
+void SnapshotSeries::append(const SnapshotFrame& f) {
+  // The file is opened on the first frame, so a run that never records one writes nothing.
+  if (!h5_) h5_ = std::make_unique<H5Writer>(dir_ + "/" + name_ + ".h5");
+  const std::string g = snapshot_group(f.step);
+  const hsize_t n = static_cast<hsize_t>(f.n);
+  h5_->write(g + "/position", f.position, {n, 3});
+  h5_->write(g + "/velocity", f.velocity, {n, 3});
+  h5_->write(g + "/angular_velocity", f.angular_velocity, {n, 3});
+  h5_->write(g + "/force", f.force, {n, 3});
+  h5_->write(g + "/radius", f.radius);
+  h5_->write(g + "/species", f.species);
+  h5_->write(g + "/id", f.id);
+  if (f.nwalls > 0)
+    h5_->write(g + "/walls/quads", f.quads, {static_cast<hsize_t>(4 * f.nwalls), 3});
+  h5_->attribute(g, "time", f.time);
+  h5_->attribute(g, "step", static_cast<double>(f.step));
+  steps_.push_back(f.step);
+  times_.push_back(f.time);
+  counts_.push_back(f.n);
+  walls_.push_back(f.nwalls);
+}
+
+void SnapshotSeries::commit() {
+  if (!h5_) return;
+  h5_->attribute("/", "snapshot_every", static_cast<double>(every_));
+  h5_->commit();
+  h5_.reset();
+  write_text_file(dir_ + "/" + name_ + ".xdmf",
+                  snapshot_xdmf(name_ + ".h5", steps_, times_, counts_, walls_));
+}
+
+std::string snapshot_xdmf(const std::string& h5_name, const std::vector<long>& steps,
+                          const std::vector<double>& times, const std::vector<int>& counts,
+                          const std::vector<int>& walls) {
+  std::ostringstream x;
+  x.precision(17);
+  auto item = [&](const std::string& dims, const char* type, int precision,
+                  const std::string& path) {
+    x << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"" << type << "\" Precision=\""
+      << precision << "\" Format=\"HDF\">" << h5_name << ":" << path << "</DataItem>";
+  };
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"series\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (size_t k = 0; k < steps.size(); ++k) {
+    const std::string g = snapshot_group(steps[k]);
+    const std::string n = std::to_string(counts[k]);
+    const bool with_walls = walls[k] > 0;
+    const std::string ind = with_walls ? "    " : "   ";
+    if (with_walls)
+      x << "   <Grid Name=\"" << g.substr(1) << "\" GridType=\"Collection\" "
+        << "CollectionType=\"Spatial\">\n    <Time Value=\"" << times[k] << "\"/>\n";
+    x << ind << "<Grid Name=\"" << (with_walls ? "particles" : g.substr(1))
+      << "\" GridType=\"Uniform\">\n"
+      << ind << " <Time Value=\"" << times[k] << "\"/>\n"
+      << ind << " <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
+      << ind << " <Geometry GeometryType=\"XYZ\">";
+    item(n + " 3", "Float", 8, g + "/position");
+    x << "</Geometry>\n";
+    struct Field {
+      const char* name;
+      bool vector, integer;
+    };
+    const Field fields[] = {{"radius", false, false},          {"velocity", true, false},
+                            {"angular_velocity", true, false}, {"force", true, false},
+                            {"species", false, true},          {"id", false, true}};
+    for (const Field& f : fields) {
+      x << ind << " <Attribute Name=\"" << f.name << "\" AttributeType=\""
+        << (f.vector ? "Vector" : "Scalar") << "\" Center=\"Node\">";
+      item(f.vector ? n + " 3" : n, f.integer ? "Int" : "Float", f.integer ? 4 : 8,
+           g + "/" + f.name);
+      x << "</Attribute>\n";
+    }
+    x << ind << "</Grid>\n";
+    if (with_walls) {
+      const int nw = walls[k];
+      x << "    <Grid Name=\"walls\" GridType=\"Uniform\">\n"
+        << "     <Time Value=\"" << times[k] << "\"/>\n"
+        << "     <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" << nw << "\">"
+        << "<DataItem Dimensions=\"" << nw << " 4\" NumberType=\"Int\" Format=\"XML\">";
+      for (int c = 0; c < 4 * nw; ++c) x << (c ? " " : "") << c;
+      x << "</DataItem></Topology>\n     <Geometry GeometryType=\"XYZ\">";
+      item(std::to_string(4 * nw) + " 3", "Float", 8, g + "/walls/quads");
+      x << "</Geometry>\n    </Grid>\n   </Grid>\n";
+    }
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  return x.str();
+}
+
+}  // namespace granular

@@ -1,0 +1,115 @@
+// Snapshots every k steps as one time series ParaView plays: <dir>/<name>.h5 holds a group
+// /step_<step> per frame (position, velocity, angular_velocity, force, radius, species, id,
+// and walls/quads where the scene has walls) and <dir>/<name>.xdmf is a temporal collection
+// of those frames with their simulated times. LAMMPS users know this as `dump every k`.
+//
+// Whole or absent: the HDF5 file is written under a temporary name and renamed by finish(),
+// and the XDMF file is written only after it, so an interrupted run leaves no series that
+// looks finished (and an earlier complete series in the folder stays as it was).
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/output.hpp"
+#include "scenarios/common/wall_config.hpp"
+
+namespace granular {
+
+// One frame on the host, rows in identity order (particle k is row k in every frame, so
+// ParaView's point ids follow the particles whatever order the engine keeps them in).
+struct SnapshotFrame {
+  long step = 0;
+  double time = 0;
+  int n = 0, nwalls = 0;
+  std::vector<double> position, velocity, angular_velocity, force, radius, quads;
+  std::vector<int> species, id;
+};
+
+class SnapshotSeries {
+ public:
+  // every = 0: off (nothing is written).
+  SnapshotSeries(std::string dir, std::string name, long every);
+  SnapshotSeries(const SnapshotSeries&) = delete;
+  SnapshotSeries& operator=(const SnapshotSeries&) = delete;
+  ~SnapshotSeries();
+
+  bool enabled() const { return every_ > 0; }
+  long every() const { return every_; }
+  int frames() const { return static_cast<int>(steps_.size()); }
+  // The next step at which a frame is due (for drivers that step in chunks).
+  long next_due(long step) const { return (step / every_ + 1) * every_; }
+
+  // Records the system's state if a frame is due: the first call, and then whenever the
+  // step count has reached a multiple of k since the last frame. Drivers that advance in
+  // chunks call it after each chunk; a frame then falls on the chunk's end.
+  template <class System>
+  void sample(const System& sys) {
+    if (!enabled()) return;
+    if (!steps_.empty() && sys.steps() / every_ == steps_.back() / every_) return;
+    append(frame_of(sys));
+  }
+  // Records the final state (unless it is already the last frame), completes the HDF5 file
+  // and writes the XDMF file.
+  template <class System>
+  void finish(const System& sys) {
+    if (!enabled()) return;
+    if (steps_.empty() || steps_.back() != sys.steps()) append(frame_of(sys));
+    commit();
+  }
+
+  template <class System>
+  static SnapshotFrame frame_of(const System& sys) {
+    const auto& p = sys.particles();
+    SnapshotFrame f;
+    f.step = sys.steps(), f.time = sys.time(), f.n = p.n;
+    auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
+    auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
+    auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.w);
+    auto fo = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.f);
+    auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
+    auto s = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
+    auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
+    f.position.resize(3 * f.n), f.velocity.resize(3 * f.n), f.angular_velocity.resize(3 * f.n);
+    f.force.resize(3 * f.n), f.radius.resize(f.n), f.species.resize(f.n), f.id.resize(f.n);
+    for (int i = 0; i < f.n; ++i) {
+      const int row = id(i);
+      for (int d = 0; d < 3; ++d) {
+        f.position[3 * row + d] = x(i, d), f.velocity[3 * row + d] = v(i, d);
+        f.angular_velocity[3 * row + d] = w(i, d), f.force[3 * row + d] = fo(i, d);
+      }
+      f.radius[row] = r(i), f.species[row] = s(i), f.id[row] = row;
+    }
+    const auto& walls = sys.walls();
+    f.nwalls = walls.size();
+    for (int k = 0; k < f.nwalls; ++k) {
+      const auto q = wall_quad(walls.specs()[k].normal, walls.host()(k).p, sys.box());
+      f.quads.insert(f.quads.end(), q.begin(), q.end());
+    }
+    return f;
+  }
+
+  // Appends one frame (host data); the templates above call it.
+  void append(const SnapshotFrame& f);
+  void commit();
+
+ private:
+  std::string dir_, name_;
+  long every_ = 0;
+  std::unique_ptr<H5Writer> h5_;
+  std::vector<long> steps_;
+  std::vector<double> times_;
+  std::vector<int> counts_, walls_;
+};
+
+// The XDMF text of a series: a temporal collection, one frame per step (particles as
+// points; walls, when there are any, as quads in a spatial collection with them).
+std::string snapshot_xdmf(const std::string& h5_name, const std::vector<long>& steps,
+                          const std::vector<double>& times, const std::vector<int>& counts,
+                          const std::vector<int>& walls);
+
+// "/step_00001000": frame groups sort by step in any HDF5 browser.
+std::string snapshot_group(long step);
+
+}  // namespace granular

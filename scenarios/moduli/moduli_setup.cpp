@@ -1,0 +1,127 @@
+// Reading and checking an elastic_moduli scene file.
+#include "scenarios/moduli/moduli_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/error.hpp"
+
+namespace granular::moduli_study {
+
+Setup read_setup(const SceneFile& scene) {
+  Setup s;
+  s.start_from = scene.text("start.from", "");
+  s.contact = ContactConfig::read(scene);
+  s.params.dt = scene.real("run.dt");
+  s.params.skin = scene.real("run.skin");
+  s.params.damping.translational = scene.real("damping.background", 0.0);
+  s.params.damping.rotational = scene.real("damping.rotational", 0.0);
+  s.params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
+  s.params.max_overlap = scene.real("run.max_overlap", 0.5);
+  s.stop_after_variants = scene.integer("run.stop_after_variants", 0);
+  s.stop_after_stages = scene.integer("run.stop_after_stages", 0);
+  scene.require(s.stop_after_variants >= 0, "run.stop_after_variants", "must not be negative");
+  scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
+  s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
+  s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
+  s.amplitude = scene.real("probe.amplitude", 3e-6);
+  s.strain_steps = scene.integer("probe.strain_steps", 2000);
+  s.probe_relax = scene.integer("probe.relax_steps", 2000);
+  s.probe_inertial = scene.real("probe.inertial_number", 0.0);
+  s.max_strain_steps = scene.integer("probe.max_strain_steps", 200000);
+  s.keep_friction = scene.flag("probe.keep_friction", false);
+  s.halving = scene.flag("probe.halving_check", false);
+  s.orientations = static_cast<int>(scene.integer("probe.orientations", 1));
+  scene.require(s.orientations == 1 || s.orientations == 3, "probe.orientations",
+                "must be 1 (shear in xy, uniaxial along x) or 3 (all planes and axes, averaged)");
+  s.kt_ratios = scene.reals("probe.kt_over_kn", {});
+  s.amplitudes = scene.reals("probe.amplitudes", {});
+  scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
+  scene.require(s.strain_steps > 0 && s.probe_relax >= 0, "probe.strain_steps",
+                "and probe.relax_steps must be positive");
+  scene.require(s.probe_inertial >= 0 && s.probe_inertial < 1e-2, "probe.inertial_number",
+                "must be in [0, 1e-2) (quasi-static probing: 1e-4 ... 1e-6)");
+  for (double a : s.amplitudes)
+    scene.require(a > 0 && a <= 0.05, "probe.amplitudes", "must lie in (0, 0.05]");
+  for (double r : s.kt_ratios) scene.require(r >= 0, "probe.kt_over_kn", "must not be negative");
+  if (!s.kt_ratios.empty())
+    scene.require(s.contact.tangential == "coulomb" && s.contact.coulomb.law == 0 &&
+                      s.contact.normal != "hertz",
+                  "probe.kt_over_kn",
+                  "needs a linear or hysteretic normal law with a constant tangential spring");
+  if (!s.start_from.empty()) {
+    s.variants.push_back({});
+    scene.reject_unknown_keys();
+    return s;
+  }
+  GasSpec& g = s.gas;
+  const long count = scene.integer("particles.count", 0);
+  scene.require(count >= 0 && count <= std::numeric_limits<int>::max(), "particles.count",
+                "must be in [2, 2^31)");
+  g.count = static_cast<int>(count);
+  g.diameter_min = scene.real("particles.diameter_min");
+  g.diameter_max = scene.real("particles.diameter_max");
+  g.density = scene.real("particles.density");
+  g.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
+  g.speed = scene.real("particles.initial_speed", 0.0);
+  g.phi = scene.real("preparation.phi_gas", 0.3);
+  s.phi0 = scene.real("preparation.phi_0", 0.5);
+  s.phi_max = scene.real("preparation.phi_max");
+  s.rate = scene.real("preparation.volumetric_strain_rate");
+  s.prep_inertial = scene.real("preparation.inertial_number", 0.0);
+  s.min_rate = scene.real("preparation.min_volumetric_strain_rate", s.rate / 20);
+  // The gas below phi_0 has no contact network to keep quasi-static (its pressure is tiny,
+  // so an inertial-number rule would crawl at the minimum rate) and is relaxed to zero
+  // pressure afterwards: it is compressed at this constant rate.
+  s.gas_rate = scene.real("preparation.gas_strain_rate", s.rate);
+  scene.require(s.gas_rate > 0, "preparation.gas_strain_rate", "must be positive");
+  const std::string branch = scene.text("preparation.branch", "unloading");
+  scene.require(branch == "unloading" || branch == "loading", "preparation.branch",
+                "must be \"unloading\" (decompression from phi_max) or \"loading\"");
+  s.loading_branch = branch == "loading";
+  s.targets = scene.reals("preparation.targets");
+  check_gas(scene, g, "preparation.phi_gas");
+  scene.require(s.phi0 > g.phi && s.phi_max > s.phi0 && s.phi_max < 1, "preparation.phi_max",
+                "must satisfy phi_gas < phi_0 < phi_max < 1");
+  for (double t : s.targets)
+    scene.require(t > s.phi0 && t < s.phi_max, "preparation.targets",
+                  "must lie between phi_0 and phi_max");
+  scene.require(s.rate > 0, "preparation.volumetric_strain_rate", "must be positive");
+  scene.require(s.min_rate > 0 && s.min_rate <= s.rate, "preparation.min_volumetric_strain_rate",
+                "must be in (0, preparation.volumetric_strain_rate]");
+  // Preparation variants: sizes x seeds x friction coefficients.
+  std::vector<double> counts = scene.reals("ensemble.counts", {});
+  std::vector<double> seeds = scene.reals("ensemble.seeds", {});
+  const std::vector<double> mus = scene.reals("preparation.mu", {});
+  if (counts.empty()) counts.push_back(g.count);
+  if (seeds.empty()) seeds.push_back(static_cast<double>(g.seed));
+  for (double c : counts) {
+    scene.require(c >= 2 && c <= std::numeric_limits<int>::max(), "particles.count",
+                  "(or ensemble.counts) must be in [2, 2^31)");
+    scene.require_memory("particles.count", c * kDemBytesPerParticle);
+  }
+  for (double m : mus) scene.require(m >= 0, "preparation.mu", "must not be negative");
+  if (!mus.empty())
+    scene.require(s.contact.tangential == "coulomb", "preparation.mu",
+                  "needs contact.tangential = \"coulomb\"");
+  const std::vector<double> mu_list = mus.empty() ? std::vector<double>{kNaN} : mus;
+  for (double c : counts)
+    for (double sd : seeds)
+      for (double mu : mu_list) {
+        PrepVariant v;
+        v.count = static_cast<int>(c), v.seed = static_cast<std::uint64_t>(sd), v.mu = mu;
+        char buf[96] = "";
+        if (counts.size() > 1 || seeds.size() > 1)
+          std::snprintf(buf, sizeof buf, "N%d_seed%d", v.count, static_cast<int>(sd));
+        if (mus.size() > 1)
+          std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), "%smu%g",
+                        buf[0] ? "_" : "", mu);
+        v.tag = buf;
+        s.variants.push_back(v);
+      }
+  scene.reject_unknown_keys();
+  return s;
+}
+
+}  // namespace granular::moduli_study

@@ -1,0 +1,205 @@
+// Scene `elastic_moduli`: the preparation protocol of dem.md section 6 (gas -> compress to
+// phi_0 -> relax -> compress to phi_max -> decompress), configurations saved on the chosen
+// branch at the listed volume fractions, relaxed and written as restartable HDF5 files
+// (configs/), then elastic probing of each (sliding switched off unless the scene keeps
+// friction): K*, G*, M*, partitions, non-affine fluctuation and inertial numbers against
+// phi Z next to effective-medium and fluctuation theory, in a table, charts and summary.json.
+// One driver covers the studies through scene keys: preparation friction list, ensembles
+// of sizes and seeds, probing tangential stiffness list, amplitude sweeps, the rate and
+// amplitude halving check, and probing saved configurations ([start] from).
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "scenarios/common/config_state.hpp"
+#include "scenarios/common/contact_config.hpp"
+#include "scenarios/common/element_test.hpp"
+#include "scenarios/common/packing.hpp"
+#include "scenarios/moduli/moduli_outputs.hpp"
+#include "scenarios/moduli/moduli_preparation.hpp"
+#include "scenarios/moduli/moduli_probing.hpp"
+#include "scenarios/moduli/moduli_setup.hpp"
+#include "scenarios/moduli/moduli_theory.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+using namespace moduli_study;
+
+void check_elastic_moduli(const SceneFile& scene) { read_setup(scene); }
+
+void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup s = read_setup(scene);
+  if (!begin_outputs(opts)) return;
+  Json summary = Json::object();
+  summary["scene"] = "elastic_moduli";
+  summary["scene_file"] = scene.path();
+  Json& pj = summary["parameters"];
+  pj = Json::object();
+  for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
+  Outputs out;
+  // Finished preparation variants are checkpointed here; a fresh run starts without them.
+  const std::string parts = opts.out_dir + "/variants";
+  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
+  // Never drop hours of preparation silently: a fresh run into a directory that holds
+  // checkpoints of an unfinished study is refused.
+  if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
+    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
+                     "--resume, or remove that directory (or choose another --out) to start over");
+  make_directories(parts);
+
+  bool stopped = false;
+  with_contact_model(s.contact, [&](const auto& model) {
+    using Model = std::decay_t<decltype(model)>;
+    if (!s.start_from.empty()) {
+      const ConfigState c = read_config(s.start_from);
+      std::cerr << "probing the saved configuration " << s.start_from << " (phi " << c.phi << ")\n";
+      analyse(s, c, model,
+              {{"mu_preparation", kNaN},
+               {"seed", kNaN},
+               {"ekin_over_epot", kNaN},
+               {"inertial_number_preparation", kNaN},
+               {"phi_target", kNaN}},
+              "", out);
+      out.add_config(s.start_from);
+      return;
+    }
+    // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
+    // branch only) and one per saved configuration.
+    const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
+    Progress progress("preparation", static_cast<long>(s.variants.size() * steps), opts.progress);
+    long done = 0, prepared = 0, stages_run = 0;
+    const auto start = std::chrono::steady_clock::now();
+    auto out_of_time = [&] {
+      const double minutes =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+      return opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes;
+    };
+    const std::function<bool()> stop = [&] {
+      ++stages_run;
+      return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
+    };
+    for (const PrepVariant& v : s.variants) {
+      const std::string part_name =
+          "variant_" + std::to_string(&v - s.variants.data()) + (v.tag.empty() ? "" : "_" + v.tag);
+      Outputs part;
+      if (opts.resume && load_moduli_part(parts, part_name, fingerprint, part)) {
+        std::cerr << "variant " << (v.tag.empty() ? part_name : v.tag)
+                  << ": taken from the checkpoint in " << parts << "\n";
+        out.append(part);
+        progress.update(done += static_cast<long>(steps));
+        continue;
+      }
+      if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
+          (prepared > 0 && out_of_time())) {
+        std::cerr << "stopped after " << prepared
+                  << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
+                     "--resume\n";
+        stopped = true;
+        return;
+      }
+      ++prepared;
+      const Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
+      const double mu = std::isnan(v.mu)
+                            ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
+                            : v.mu;
+      const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
+      make_directories(dir);
+      std::vector<double> targets = s.targets;
+      const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
+      const bool finished = prepare(s, v, prep, part, progress, done, ck, stop,
+                                    [&](const ConfigState& c, double ratio, double I) {
+                                      // The target this configuration was saved at (the closest
+                                      // listed value).
+                                      double target = targets[0];
+                                      for (double t : targets)
+                                        if (std::fabs(t - c.phi) < std::fabs(target - c.phi))
+                                          target = t;
+                                      char name[64];
+                                      std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
+                                      write_config(dir + name, c);
+                                      part.add_config(dir + name);
+                                      analyse(s, c, prep,
+                                              {{"mu_preparation", mu},
+                                               {"seed", static_cast<double>(v.seed)},
+                                               {"ekin_over_epot", ratio},
+                                               {"inertial_number_preparation", I},
+                                               {"phi_target", target}},
+                                              v.tag, part);
+                                    });
+      if (!finished) {
+        std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
+                     "continue with --resume\n";
+        stopped = true;
+        return;
+      }
+      save_moduli_part(parts, part_name, fingerprint, part);
+      out.append(part);
+    }
+  });
+
+  if (stopped) return;  // the checkpoints in variants/ are the output so far
+  H5Writer h5(opts.out_dir + "/results.h5");
+  for (const auto& [k, v] : out.table) h5.write("/table/" + k, v);
+  for (const auto& [k, v] : out.prep) h5.write("/preparation/" + k, v);
+  for (const auto& [k, v] : out.sweep_data) h5.write(k, v);
+  h5.commit();
+  summary["configurations"] = out.configs;
+  summary["table"] = out.rows;
+  if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
+  if (s.halving) {
+    // Largest relative change of K, G, M over all configurations when the probing
+    // amplitude or rate is halved: the elastic-plateau criterion is < 1 %.
+    // Configurations below jamming have no elastic plateau.
+    double worst_a = 0, worst_r = 0;
+    const auto& jammed = out.table.at("jammed");
+    for (const char* m : {"K", "G", "M"}) {
+      const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
+      const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
+      for (size_t i = 0; i < jammed.size(); ++i)
+        if (jammed[i] > 0) worst_a = std::max(worst_a, a[i]), worst_r = std::max(worst_r, r[i]);
+    }
+    Json& hc = summary["halving_check"];
+    hc = Json::object();
+    hc["max_rel_change_half_amplitude"] = worst_a;
+    hc["max_rel_change_half_rate"] = worst_r;
+    hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
+    hc["unjammed_configurations_left_out"] =
+        static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
+  }
+  // Scatter of the moduli over seeds at each size and target (system-size study).
+  const std::vector<SizeScatter> scatter = size_scatter(out.table);
+  if (!scatter.empty()) {
+    bool several_mu = false;
+    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+    for (const SizeScatter& e : scatter) several_mu = several_mu || !same(e.mu, scatter[0].mu);
+    Json sc = Json::array();
+    for (const SizeScatter& e : scatter) {
+      Json j = Json::object();
+      if (several_mu) j["mu_preparation"] = e.mu;
+      j["particles"] = e.particles, j["phi_target"] = e.phi_target;
+      j["samples"] = static_cast<double>(e.samples);
+      j["K_star_mean"] = e.K_mean, j["K_star_std"] = e.K_std;
+      j["G_star_mean"] = e.G_mean, j["G_star_std"] = e.G_std;
+      sc.push(j);
+    }
+    summary["size_scatter"] = sc;
+  }
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
+  if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

@@ -1,0 +1,275 @@
+// Scene `isotropic_compression` (the default main job): a random polydisperse gas is
+// compressed isotropically at a constant volumetric strain rate to a dense packing, then
+// relaxed at constant volume. Records P, Z, E_kin/E_pot against phi; checkpoints so an
+// interrupted run can resume (--resume).
+#include <Kokkos_Core.hpp>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <map>
+
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "kernels/contact_model.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/dem_output.hpp"
+#include "scenarios/common/packing.hpp"
+#include "scenarios/common/snapshot_series.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+namespace {
+
+using Exec = Kokkos::DefaultExecutionSpace;
+using System = DemSystem<Exec, FrictionlessLinear>;
+
+// Columns of the time series, in file order.
+const char* const kSeries[] = {"time",
+                               "step",
+                               "phi",
+                               "pressure",
+                               "pressure_star",
+                               "z",
+                               "z_corrected",
+                               "rattler_fraction",
+                               "ekin",
+                               "epot",
+                               "ekin_over_epot",
+                               "max_overlap",
+                               "stress_xx",
+                               "stress_yy",
+                               "stress_zz",
+                               "neighbor_builds",
+                               "phase"};
+
+struct Series {
+  std::map<std::string, std::vector<double>> col;
+  void add(const System& sys, const Measurements& m, double d_mean, double phase) {
+    const double kn = sys.model().normal.table.p[0][0].kn;
+    const double vals[] = {sys.time(),
+                           static_cast<double>(sys.steps()),
+                           m.phi,
+                           m.pressure,
+                           m.pressure * d_mean / kn,
+                           m.z,
+                           m.z_corrected,
+                           m.rattlers / sys.particles().n,
+                           m.ekin,
+                           m.epot,
+                           m.epot > 0 ? m.ekin / m.epot : NAN,
+                           m.max_overlap,
+                           m.stress[0],
+                           m.stress[1],
+                           m.stress[2],
+                           static_cast<double>(sys.neighbor_list().builds()),
+                           phase};
+    for (size_t c = 0; c < std::size(kSeries); ++c) col[kSeries[c]].push_back(vals[c]);
+  }
+  void write(H5Writer& out, const std::string& group) const {
+    for (const auto& [name, v] : col) out.write(group + "/" + name, v);
+  }
+  void read(const H5Reader& in, const std::string& group) {
+    for (const char* name : kSeries) col[name] = in.reals(group + "/" + name);
+  }
+};
+
+}  // namespace
+
+void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
+  GasSpec gas;
+  gas.count = scene.count("particles.count", 2, kDemBytesPerParticle);
+  gas.diameter_min = scene.real("particles.diameter_min");
+  gas.diameter_max = scene.real("particles.diameter_max");
+  gas.density = scene.real("particles.density");
+  gas.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
+  gas.speed = scene.real("particles.initial_speed", 0.0);
+  gas.phi = scene.real("compression.phi_start");
+  const double phi_end = scene.real("compression.phi_end");
+  const double rate = scene.real("compression.volumetric_strain_rate");
+  const long relax_steps = scene.integer("compression.relax_steps", 0);
+  const double kn = scene.real("contact.kn"), gn = scene.real("contact.gamma_n");
+  const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
+  DemParams params;
+  params.dt = scene.real("run.dt");
+  params.skin = scene.real("run.skin");
+  params.damping.translational = scene.real("damping.background", 0.0);
+  params.damping.rotational = scene.real("damping.rotational", 0.0);
+  params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
+  params.max_overlap = scene.real("run.max_overlap", 0.3);
+  const long sample_every = scene.integer("run.sample_every", 500);
+  const long checkpoint_every = scene.integer("run.checkpoint_every", 100000);
+  // Stop as if interrupted after this many steps (0: never), leaving the checkpoint behind;
+  // used to test that --resume reproduces an uninterrupted run.
+  const long stop_after = scene.integer("run.stop_after", 0);
+  // ParaView time series: a frame at the first sample at or after every k steps (0: none).
+  const long snapshot_every = scene.integer("output.snapshot_every", 0);
+  scene.require(gas.count >= 2, "particles.count", "must be at least 2");
+  check_gas(scene, gas, "compression.phi_start");
+  scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
+                "must lie between compression.phi_start and 1");
+  scene.require(rate > 0, "compression.volumetric_strain_rate", "must be positive");
+  scene.require(params.skin > 0, "run.skin", "must be positive");
+  scene.require(sample_every > 0, "run.sample_every", "must be positive");
+  scene.require(checkpoint_every > 0, "run.checkpoint_every", "must be positive");
+  scene.require(relax_steps >= 0, "compression.relax_steps", "must not be negative");
+  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  scene.reject_unknown_keys();
+
+  if (!begin_outputs(opts)) return;
+  const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
+  const double d_mean = 0.5 * (gas.diameter_min + gas.diameter_max);
+
+  PeriodicBox box;
+  HostParticles host;
+  Series series;
+  double t0 = 0;
+  long step0 = 0;
+  if (opts.resume) {
+    if (!std::filesystem::exists(checkpoint))
+      throw InputError("--resume: no checkpoint at " + checkpoint);
+    H5Reader in(checkpoint);
+    double density = 0;
+    host = read_state(in, "/state", box, density);
+    series.read(in, "/series");
+    t0 = in.attribute("/state", "time");
+    step0 = static_cast<long>(in.attribute("/state", "step"));
+    std::cerr << "resuming from " << checkpoint << " at step " << step0 << "\n";
+  } else {
+    host = random_gas(gas, box);
+  }
+
+  System sys(Particles<Exec>::from_host(host), box, model, params);
+  sys.set_clock(t0, step0);
+  if (opts.resume) {  // the exact state the interrupted run had at its checkpoint
+    H5Reader in(checkpoint);
+    if (!in.has("/restart"))
+      throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
+    sys.load_restart(in, "/restart");
+  }
+
+  // Per-axis rate for the volumetric rate: V(t) = V0 exp(-rate t) in the limit dt -> 0.
+  const double axis_rate = -rate / 3.0;
+  const double shrink_per_step = std::pow(1.0 + axis_rate * params.dt, 3);
+  const double phi_start = gas.phi;
+  const long compress_steps =
+      static_cast<long>(std::ceil(std::log(phi_end / phi_start) / -std::log(shrink_per_step)));
+  const long total_steps = compress_steps + relax_steps;
+
+  // A checkpoint stores the system's exact state and changes nothing in it, so the run does
+  // not depend on checkpoint_every and a resumed run repeats the uninterrupted one bit for bit.
+  // The strain rate of the step about to be taken (compression, then relaxation).
+  auto set_phase_rate = [&]() {
+    const double r = sys.steps() < compress_steps ? axis_rate : 0.0;
+    sys.set_strain_rate(r, r, r);
+  };
+  auto save_checkpoint = [&]() {
+    H5Writer out(checkpoint);
+    write_state(out, "/state", sys.particles(), sys.box(), gas.density);
+    sys.save_restart(out, "/restart");
+    out.attribute("/state", "time", sys.time());
+    out.attribute("/state", "step", static_cast<double>(sys.steps()));
+    series.write(out, "/series");
+    out.commit();
+  };
+  auto write_failure_snapshot = [&]() {
+    H5Writer out(opts.out_dir + "/last_state.h5");
+    write_state(out, "/state", sys.particles(), sys.box(), gas.density);
+    out.commit();
+    write_particle_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5", "/state",
+                        sys.particles().n);
+  };
+
+  // A resumed run's series starts where it resumed; an interrupted one leaves none.
+  SnapshotSeries snapshots(opts.out_dir, "snapshots", snapshot_every);
+  try {
+    if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
+    snapshots.sample(sys);
+    Progress progress("isotropic compression", total_steps - step0, opts.progress);
+    while (sys.steps() < total_steps) {
+      const bool compressing = sys.steps() < compress_steps;
+      const long phase_end = compressing ? compress_steps : total_steps;
+      const long next_sample = (sys.steps() / sample_every + 1) * sample_every;
+      const long next_checkpoint = (sys.steps() / checkpoint_every + 1) * checkpoint_every;
+      const long n = std::min({phase_end, next_sample, next_checkpoint}) - sys.steps();
+      set_phase_rate();
+      sys.step(n);
+      const Measurements m = sys.measure();
+      sys.check_health(m);
+      series.add(sys, m, d_mean, compressing ? 0 : 1);
+      snapshots.sample(sys);
+      char extra[96];
+      std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi,
+                    m.pressure * d_mean / kn, m.z_corrected);
+      progress.update(sys.steps() - step0, extra);
+      if (sys.steps() / checkpoint_every != (sys.steps() - n) / checkpoint_every) save_checkpoint();
+      if (stop_after > 0 && sys.steps() >= stop_after) {
+        std::cerr << "stopped after step " << sys.steps()
+                  << " (run.stop_after); continue with --resume\n";
+        return;
+      }
+    }
+  } catch (const PhysicsError&) {
+    write_failure_snapshot();
+    try {  // the frames up to the failure show how it came about
+      snapshots.finish(sys);
+    } catch (const std::exception& e) {
+      std::cerr << "warning: snapshot series not written: " << e.what() << "\n";
+    }
+    throw;
+  }
+
+  const Measurements fin = sys.measure();
+  H5Writer h5(opts.out_dir + "/results.h5");
+  series.write(h5, "/series");
+  write_state(h5, "/final_state", sys.particles(), sys.box(), gas.density);
+  h5.attribute("/", "scene", std::string("isotropic_compression"));
+  h5.attribute("/", "kn", kn);
+  h5.attribute("/", "mean_diameter", d_mean);
+  h5.commit();
+  write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state",
+                      sys.particles().n);
+  snapshots.finish(sys);
+
+  // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.
+  const auto& phi = series.col.at("phi");
+  const auto& pstar = series.col.at("pressure_star");
+  double phi_onset = NAN;
+  for (size_t i = 0; i < phi.size(); ++i)
+    if (series.col.at("phase")[i] == 0 && pstar[i] > 1e-5) {
+      phi_onset = phi[i];
+      break;
+    }
+
+  Json summary = Json::object();
+  summary["scene"] = "isotropic_compression";
+  summary["scene_file"] = scene.path();
+  Json& params_json = summary["parameters"];
+  params_json = Json::object();
+  for (const auto& [k, v] : scene.used()) params_json[k] = Json::raw(v);
+  Json& res = summary["results"];
+  res = Json::object();
+  res["particles"] = gas.count;
+  res["steps"] = sys.steps();
+  res["simulated_time"] = sys.time();
+  res["phi_final"] = fin.phi;
+  res["pressure_final"] = fin.pressure;
+  res["pressure_star_final"] = fin.pressure * d_mean / kn;
+  res["z_final"] = fin.z;
+  res["z_corrected_final"] = fin.z_corrected;
+  res["rattler_fraction_final"] = fin.rattlers / gas.count;
+  res["ekin_over_epot_final"] = fin.epot > 0 ? fin.ekin / fin.epot : NAN;
+  res["max_overlap_final"] = fin.max_overlap;
+  res["phi_pressure_onset"] = phi_onset;
+  res["neighbor_builds"] = sys.neighbor_list().builds();
+  // Volumetric inertial number at the end of compression, I_v = rate <d> sqrt(rho / P).
+  res["inertial_number_final"] =
+      fin.pressure > 0 ? rate * d_mean * std::sqrt(gas.density / fin.pressure) : NAN;
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  std::error_code ec;
+  std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
+  if (opts.charts)
+    run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

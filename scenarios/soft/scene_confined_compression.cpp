@@ -1,0 +1,346 @@
+// Scene `confined_compression`: soft polydisperse balls in a rigid box, compressed along z
+// by the top wall and decompressed (multicontact.md). Preparation: random insertion into a
+// tall region, settling under gravity with background damping, the top wall closed at the
+// box height. Then, from that one state, one run per force model (classical Hertz,
+// MC-strain, MC-stress): force on the top wall against strain, the largest force and the
+// wall-clock cost of each model on the same run.
+#include <Kokkos_Core.hpp>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/box_fill.hpp"
+#include "scenarios/common/config_state.hpp"
+#include "scenarios/common/dem_output.hpp"
+#include "scenarios/common/materials.hpp"
+#include "scenarios/common/snapshot_series.hpp"
+#include "scenarios/common/wall_config.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "scenarios/soft/soft_models.hpp"
+
+namespace granular {
+
+namespace {
+
+using Exec = Kokkos::DefaultExecutionSpace;
+
+struct Setup {
+  MaterialSet mats;
+  int particle = 0, wall = 0;
+  double size[3] = {165, 165, 167};
+  FillSpec fill;
+  double region_height = 0, gravity = 0, damping_time = 0, settle_ratio = 0, settle_max_time = 0;
+  double strain = 0, wall_speed = 0, dt = 0, max_overlap = 0.6;
+  long sample_every = 100;
+  long snapshot_every = 0;  // ParaView time series of each compression (0: none)
+  double experiment_force = -1, experiment_strain = -1;
+  std::vector<SoftModel> models;
+};
+
+Setup read_setup(const SceneFile& s) {
+  Setup c;
+  c.mats = MaterialSet::read(s);
+  c.particle = c.mats.at(s, "compression.particle_material");
+  c.wall = c.mats.at(s, "compression.wall_material");
+  const auto size = s.reals("box.size");
+  s.require(size.size() == 3 && size[0] > 0 && size[1] > 0 && size[2] > 0, "box.size",
+            "must hold three positive lengths");
+  for (int d = 0; d < 3; ++d) c.size[d] = size[d];
+  c.fill.count = s.count("fill.count", 1, kDemBytesPerParticle);
+  c.fill.diameter_mean = s.real("fill.diameter_mean");
+  c.fill.diameter_spread = s.real("fill.diameter_spread", 0.1);
+  c.fill.seed = static_cast<std::uint64_t>(s.integer("fill.seed", 1));
+  c.fill.density = c.mats.materials[c.particle].density;
+  c.fill.species = c.particle;
+  c.region_height = s.real("fill.region_height");
+  c.gravity = s.real("fill.gravity", 9.81e-9);  // mm/us^2
+  c.damping_time = s.real("fill.damping_time");
+  c.settle_ratio = s.real("fill.kinetic_energy_ratio", 1e-6);
+  c.settle_max_time = s.real("fill.max_time");
+  c.strain = s.real("compression.strain");
+  c.wall_speed = s.real("compression.wall_speed");
+  c.dt = s.real("compression.time_step");
+  c.sample_every = s.integer("compression.sample_every", 100);
+  c.max_overlap = s.real("run.max_overlap", 0.6);
+  c.snapshot_every = s.integer("output.snapshot_every", 0);
+  c.experiment_force = s.real("compression.experiment_max_force", -1.0);
+  c.experiment_strain = s.real("compression.experiment_strain", -1.0);
+  c.models = read_soft_models(s, c.mats);
+  s.require(c.fill.diameter_mean > 0, "fill.diameter_mean", "must be positive");
+  s.require(c.fill.diameter_spread >= 0 && c.fill.diameter_spread < 1, "fill.diameter_spread",
+            "must lie in [0, 1)");
+  s.require(c.region_height >= c.size[2], "fill.region_height", "must reach the box height");
+  s.require(c.gravity >= 0, "fill.gravity", "must not be negative");
+  s.require(c.damping_time > 0, "fill.damping_time", "must be positive");
+  s.require(c.settle_ratio > 0, "fill.kinetic_energy_ratio", "must be positive");
+  s.require(c.settle_max_time > 0, "fill.max_time", "must be positive");
+  s.require(c.gravity == 0 || 1.5 * std::sqrt(2 * c.region_height / c.gravity) < c.settle_max_time,
+            "fill.max_time", "must exceed 1.5 free-fall times through fill.region_height");
+  s.require(c.strain > 0 && c.strain < 0.6, "compression.strain", "must lie in (0, 0.6)");
+  s.require(c.wall_speed > 0, "compression.wall_speed", "must be positive");
+  s.require(c.dt > 0, "compression.time_step", "must be positive");
+  s.require(c.sample_every >= 1, "compression.sample_every", "must be at least 1");
+  s.require(c.snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  s.require(c.fill.density > 0, "compression.particle_material", "needs a positive density");
+  s.reject_unknown_keys();
+  return c;
+}
+
+// Floor, four sides and the top wall (outward normals), the top at height `top`.
+std::vector<WallSpec> box_walls(const Setup& c, double top) {
+  const double n[6][3] = {{0, 0, -1}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, 1}};
+  const double p[6][3] = {{0, 0, 0}, {0, 0, 0},         {c.size[0], 0, 0},
+                          {0, 0, 0}, {0, c.size[1], 0}, {0, 0, top}};
+  const char* names[6] = {"floor", "x_low", "x_high", "y_low", "y_high", "top"};
+  std::vector<WallSpec> out;
+  for (int w = 0; w < 6; ++w) {
+    WallSpec s;
+    s.name = names[w], s.material = c.wall;
+    for (int d = 0; d < 3; ++d) s.normal[d] = n[w][d], s.point[d] = p[w][d];
+    out.push_back(s);
+  }
+  return out;
+}
+
+PeriodicBox closed_box(const Setup& c, double height) {
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.periodic[d] = false;
+  box.len[0] = c.size[0], box.len[1] = c.size[1], box.len[2] = height;
+  return box;
+}
+
+template <class Model>
+ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, Json& out) {
+  PeriodicBox region_box = closed_box(c, c.region_height);
+  FillSpec f = c.fill;
+  for (int d = 0; d < 3; ++d) f.lo[d] = 0, f.hi[d] = d == 2 ? c.region_height : c.size[d];
+  const HostParticles h = fill_region(f, region_box);
+  double mean_mass = 0, mean_d = 0;
+  for (int i = 0; i < h.size(); ++i) {
+    mean_mass += h.density[i] * 4.0 / 3.0 * M_PI * std::pow(h.radius[i], 3) / h.size();
+    mean_d += 2 * h.radius[i] / h.size();
+  }
+  DemParams prm;
+  prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
+  prm.gravity[2] = -c.gravity;
+  prm.damping.translational = mean_mass / c.damping_time;
+  prm.damping.rotational = 0.1 * mean_mass * mean_d * mean_d / c.damping_time;
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), region_box, model, prm);
+  sys.set_walls(box_walls(c, c.region_height));
+  // Settled: mean kinetic energy per particle below ratio x (mean weight x mean diameter).
+  const double e_ref = mean_mass * std::max(c.gravity, 1e-300) * mean_d;
+  const long max_steps = static_cast<long>(c.settle_max_time / c.dt);
+  // Not settled before the highest particle could have landed: 1.5 free-fall times of the
+  // region (the balls are inserted at rest, so the criterion holds at the start).
+  const long fall_steps =
+      c.gravity > 0
+          ? static_cast<long>(std::ceil(1.5 * std::sqrt(2 * c.region_height / c.gravity) / c.dt))
+          : 0;
+
+  Progress progress("settling", max_steps, opts.progress);
+  const long steps = settle(
+      [&](long n) {
+        sys.step(n);
+        sys.check_health(sys.measure());
+        progress.update(sys.steps());
+      },
+      [&]() { return sys.measure().ekin / h.size() < c.settle_ratio * e_ref; }, 1000, max_steps,
+      fall_steps);
+  progress.finish();
+  if (steps < 0)
+    throw PhysicsError("the poured packing did not settle within fill.max_time = " +
+                       std::to_string(c.settle_max_time) +
+                       ": raise it, or shorten fill.damping_time");
+  // Close the box: the top wall comes down from the top of the insertion region to the box
+  // height at the compression speed (a pile standing higher is pressed down to it), then
+  // the packing settles again.
+  auto walls = box_walls(c, c.region_height);
+  const double travel = c.region_height - c.size[2], t_now = sys.time();
+  walls.back().motion = WallMotion::Table;
+  walls.back().table_t = {t_now, t_now + travel / c.wall_speed + c.dt};
+  walls.back().table_u = {0.0, -travel};
+  sys.set_walls(walls);
+  const long close_steps = static_cast<long>(std::ceil((travel / c.wall_speed + c.dt) / c.dt));
+  sys.step(close_steps);
+  sys.check_health(sys.measure());
+  const long steps2 = settle(
+      [&](long n) {
+        sys.step(n);
+        sys.check_health(sys.measure());
+      },
+      [&]() { return sys.measure().ekin / h.size() < c.settle_ratio * e_ref; }, 1000, max_steps);
+  if (steps2 < 0)
+    throw PhysicsError("the packing did not settle after closing the box within fill.max_time = " +
+                       std::to_string(c.settle_max_time) + ": raise it");
+  std::vector<double> density(h.density);
+  ConfigState state = snapshot(sys, density, 0.0);
+  double top = 0;
+  for (int i = 0; i < state.size(); ++i)
+    top = std::max(top, state.particles.z[i] + state.particles.radius[i]);
+  out["settle_steps"] = steps + close_steps + steps2;
+  out["pile_height"] = top;
+  out["top_wall_force_at_start"] = sys.wall_loads().back().force[2];
+  out["volume_fraction_box"] = sys.particle_volume() / (c.size[0] * c.size[1] * c.size[2]);
+  for (int i = 0; i < state.size(); ++i)  // start the compression from rest
+    state.particles.vx[i] = state.particles.vy[i] = state.particles.vz[i] = 0;
+  std::fill(state.w.begin(), state.w.end(), 0.0);
+  return state;
+}
+
+struct Curve {
+  std::vector<double> time, strain, force, position;
+  double wall_seconds = 0, max_force = 0;
+  long steps = 0;
+  std::string failure;  // why the run stopped early (empty: it finished)
+  WallSeries walls;     // every wall's position, force, torque and contacts
+};
+
+template <class Model>
+Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const ConfigState& st,
+               const std::string& label, const RunOptions& opts, H5Writer* snap) {
+  DemParams prm;
+  prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
+  prm.gravity[2] = -c.gravity;
+  const double H = c.size[2];
+  DemSystem<Exec, Model> sys(particles_from<Exec>(st), closed_box(c, H), model, prm);
+  restore_history(sys, st);  // the pair springs of the settled packing (walls start fresh)
+  auto walls = box_walls(c, H);
+  // Top wall: down by strain x H at the wall speed, then back up to H.
+  const double travel = c.strain * H, t_half = travel / c.wall_speed;
+  WallSpec& top = walls.back();
+  top.motion = WallMotion::Table;
+  top.table_t = {0.0, t_half, 2 * t_half};
+  top.table_u = {0.0, -travel, 0.0};
+  sys.set_walls(walls);
+  if (mc.mode != MultiContact::None) sys.set_multicontact(mc);
+  const long steps = static_cast<long>(std::ceil(2 * t_half / c.dt));
+  Curve out;
+  out.walls.resize(walls);
+  Progress progress(label, steps, opts.progress);
+  auto sample = [&]() {
+    const auto loads = sys.wall_loads();
+    const double z = sys.walls().host()(5).p[2];
+    out.walls.time.push_back(sys.time());
+    for (size_t w = 0; w < loads.size(); ++w) {
+      for (int d = 0; d < 3; ++d) {
+        out.walls.position[w].push_back(sys.walls().host()(w).p[d]);
+        out.walls.force[w].push_back(loads[w].force[d]);
+        out.walls.torque[w].push_back(loads[w].torque[d]);
+      }
+      out.walls.contacts[w].push_back(loads[w].contacts);
+    }
+    out.time.push_back(sys.time());
+    out.position.push_back(z);
+    out.strain.push_back((H - z) / H);
+    out.force.push_back(loads[5].force[2]);  // pushed up by the particles: positive
+    out.max_force = std::max(out.max_force, loads[5].force[2]);
+  };
+  // Frames at the first sample at or after every k steps, one series per model.
+  SnapshotSeries series(opts.out_dir, "snapshots_" + label, c.snapshot_every);
+  const auto t0 = std::chrono::steady_clock::now();
+  sample();
+  series.sample(sys);
+  bool snapped = false;
+  for (long s = 0; s < steps; s += c.sample_every) {
+    sys.step(std::min(c.sample_every, steps - s));
+    // A model that breaks down (MC-strain's explicit feedback at large loads) ends its own
+    // curve, not the study: the curve up to there and the reason are kept.
+    try {
+      sys.check_health(sys.measure());
+    } catch (const PhysicsError& e) {
+      out.failure = e.what();
+      break;
+    }
+    sample();
+    series.sample(sys);
+    progress.update(sys.steps());
+    if (snap && !snapped && sys.time() >= t_half) {  // the most compressed state
+      write_state(*snap, "/snapshot", sys.particles(), sys.box(), c.fill.density);
+      std::vector<double> quads;
+      for (const auto& w : sys.walls().specs()) {
+        double x[3], v[3];
+        w.state(sys.time(), x, v);
+        const auto q = wall_quad(w.normal, x, sys.box());
+        quads.insert(quads.end(), q.begin(), q.end());
+      }
+      snap->write("/snapshot_walls/quads", quads, {static_cast<hsize_t>(quads.size() / 3), 3});
+      snapped = true;
+    }
+  }
+  out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  series.finish(sys);  // after the timing: the model's cost excludes the snapshot files
+  out.steps = sys.steps();
+  progress.finish();
+  return out;
+}
+
+}  // namespace
+
+void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
+  const Setup c = read_setup(scene);
+  if (!begin_outputs(opts)) return;
+  H5Writer h5(opts.out_dir + "/results.h5");
+  Json summary = Json::object();
+  summary["scene"] = "confined_compression";
+  summary["scene_file"] = scene.path();
+  Json& params = summary["parameters"];
+  params = Json::object();
+  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json prep = Json::object();
+  ConfigState state;
+  const auto t0 = std::chrono::steady_clock::now();
+  with_material_model(c.mats, [&](const auto& m) { state = prepare(m, c, opts, prep); });
+  prep["wall_seconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary["preparation"] = prep;
+  Json models = Json::object();
+  for (size_t k = 0; k < c.models.size(); ++k) {
+    const SoftModel& sm = c.models[k];
+    Curve curve;
+    with_material_model(c.mats, [&](const auto& m) {
+      curve = compress(m, sm.mc, c, state, sm.label, opts, k == 0 ? &h5 : nullptr);
+    });
+    const std::string g = "/runs/" + sm.label;
+    h5.write(g + "/time", curve.time);
+    h5.write(g + "/strain", curve.strain);
+    h5.write(g + "/top_wall_force", curve.force);
+    h5.write(g + "/top_wall_position", curve.position);
+    h5.attribute(g, "wall_seconds", curve.wall_seconds);
+    curve.walls.write(h5, g + "/walls");
+    Json j = Json::object();
+    j["max_force"] = curve.max_force;
+    j["wall_seconds"] = curve.wall_seconds;
+    j["steps"] = curve.steps;
+    j["particle_steps_per_second"] = curve.steps * c.fill.count / curve.wall_seconds;
+    if (!curve.failure.empty()) {
+      j["failure"] = curve.failure;
+      j["failed_at_strain"] = curve.strain.back();
+      j["failed_on_loading"] = curve.time.back() <= c.strain * c.size[2] / c.wall_speed;
+      h5.attribute(g, "failure", curve.failure);
+    }
+    models[sm.label] = j;
+    std::cout << sm.label << ": largest top-wall force " << curve.max_force << " N, "
+              << curve.wall_seconds << " s wall clock (" << curve.steps << " steps)\n";
+    if (!curve.failure.empty())
+      std::cout << "  stopped at strain " << curve.strain.back() << ": " << curve.failure << "\n";
+  }
+  summary["models"] = models;
+  if (c.experiment_force > 0) {
+    summary["experiment_max_force"] = c.experiment_force;
+    summary["experiment_strain"] = c.experiment_strain;
+  }
+  h5.attribute("/", "strain", c.strain);
+  h5.attribute("/", "experiment_max_force", c.experiment_force);
+  h5.attribute("/", "experiment_strain", c.experiment_strain);
+  h5.commit();
+  write_scene_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", "/snapshot", c.fill.count,
+                   "/snapshot_walls", 6);
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  if (opts.charts)
+    run_plot_script("confined_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

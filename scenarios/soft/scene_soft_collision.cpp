@@ -1,0 +1,136 @@
+// Scene `soft_collision`: the multi-contact reference collisions (multicontact.md). Three
+// soft spheres in a row, the outer two launched at the centre one; five spheres (two more
+// along y, launched the same way). For each material and each force model (classical
+// Hertz, MC-strain, MC-stress): kinetic energy and the centre particle's overlap against
+// time. A sphere pressed from several sides at once is where the models differ.
+#include <Kokkos_Core.hpp>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+#include "core/output.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/materials.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "scenarios/soft/soft_models.hpp"
+
+namespace granular {
+
+namespace {
+
+struct Layout {
+  std::string name;
+  std::vector<std::array<double, 3>> dir;  // unit directions of the outer spheres
+};
+
+template <class Model>
+Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, int species,
+             double density, double a, double speed, double dt, double duration, long every,
+             H5Writer& h5, const std::string& group) {
+  using Exec = Kokkos::DefaultExecutionSpace;
+  const int n = 1 + static_cast<int>(layout.dir.size());
+  const double start = 2 * a + 2 * speed * dt;  // touching after two steps
+  HostParticles h;
+  h.resize(n);
+  for (int i = 0; i < n; ++i) h.radius[i] = a, h.density[i] = density, h.species[i] = species;
+  for (int k = 0; k < n - 1; ++k) {
+    const auto& d = layout.dir[k];
+    h.x[k + 1] = start * d[0], h.y[k + 1] = start * d[1], h.z[k + 1] = start * d[2];
+    h.vx[k + 1] = -speed * d[0], h.vy[k + 1] = -speed * d[1], h.vz[k + 1] = -speed * d[2];
+  }
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = -8 * a, box.len[d] = 16 * a, box.periodic[d] = false;
+  DemParams prm;
+  prm.dt = dt, prm.skin = 0.2 * a, prm.max_overlap = 0.9, prm.sort = false;
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
+  if (mc.mode != MultiContact::None) sys.set_multicontact(mc);
+  std::vector<double> t, ekin, overlap;
+  auto xh = Kokkos::create_mirror_view(sys.particles().x);
+  auto sample = [&]() {
+    Kokkos::deep_copy(xh, sys.particles().x);
+    double sum = 0;
+    for (int k = 1; k < n; ++k) {
+      double r2 = 0;
+      for (int d = 0; d < 3; ++d) r2 += (xh(k, d) - xh(0, d)) * (xh(k, d) - xh(0, d));
+      sum += std::max(0.0, 2 * a - std::sqrt(r2));
+    }
+    t.push_back(sys.time());
+    ekin.push_back(sys.measure().ekin);
+    overlap.push_back(sum / (n - 1));
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  sample();
+  const long steps = static_cast<long>(duration / dt);
+  for (long s = 0; s < steps; s += every) {
+    sys.step(std::min(every, steps - s));
+    sample();
+    sys.check_health(sys.measure());
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  h5.write(group + "/time", t);
+  h5.write(group + "/kinetic_energy", ekin);
+  h5.write(group + "/centre_overlap", overlap);
+  const double max_overlap = *std::max_element(overlap.begin(), overlap.end());
+  Json j = Json::object();
+  j["max_centre_overlap"] = max_overlap;
+  j["max_centre_overlap_over_radius"] = max_overlap / a;
+  j["kinetic_energy_final_over_initial"] = ekin.back() / ekin.front();
+  j["wall_seconds"] = wall;
+  std::cout << group << ": largest centre overlap / a = " << max_overlap / a
+            << ", final / initial kinetic energy " << ekin.back() / ekin.front() << " (" << wall
+            << " s)\n";
+  return j;
+}
+
+}  // namespace
+
+void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
+  const MaterialSet mats = MaterialSet::read(scene);
+  const auto dts = scene.reals("soft.time_steps");
+  scene.require(dts.size() == mats.materials.size(), "soft.time_steps",
+                "needs one time step per material of [materials] (sorted by name)");
+  const double a = 0.5 * scene.real("soft.diameter");
+  const double speed = scene.real("soft.speed");
+  const double duration = scene.real("soft.duration");
+  const long every = scene.integer("soft.sample_every", 10);
+  const auto models = read_soft_models(scene, mats);
+  scene.require(a > 0, "soft.diameter", "must be positive");
+  scene.require(speed > 0, "soft.speed", "must be positive");
+  scene.require(duration > 0, "soft.duration", "must be positive");
+  scene.require(every >= 1, "soft.sample_every", "must be at least 1");
+  for (const auto& m : mats.materials)
+    scene.require(m.density > 0, "materials." + m.name + ".density", "must be positive");
+  scene.reject_unknown_keys();
+
+  const std::vector<Layout> layouts = {{"three", {{1, 0, 0}, {-1, 0, 0}}},
+                                       {"five", {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}}};
+  if (!begin_outputs(opts)) return;
+  H5Writer h5(opts.out_dir + "/results.h5");
+  Json summary = Json::object();
+  summary["scene"] = "soft_collision";
+  summary["scene_file"] = scene.path();
+  Json& params = summary["parameters"];
+  params = Json::object();
+  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json runs = Json::object();
+  for (const Layout& layout : layouts)
+    for (size_t s = 0; s < mats.materials.size(); ++s) {
+      const Material& mat = mats.materials[s];
+      const MaterialSet one = mats.only(static_cast<int>(s));  // species 0 in these runs
+      for (const SoftModel& model : models) {
+        const std::string group = "/runs/" + layout.name + "/" + mat.name + "/" + model.label;
+        with_material_model(one, [&](const auto& m) {
+          Json j = run_one(m, with_materials(model.mc, one), layout, 0, mat.density, a, speed,
+                           dts[s], duration, every, h5, group);
+          runs[layout.name + "/" + mat.name + "/" + model.label] = j;
+        });
+      }
+    }
+  summary["runs"] = runs;
+  h5.attribute("/", "radius", a);
+  h5.commit();
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  if (opts.charts) run_plot_script("soft_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

@@ -1,0 +1,59 @@
+// The force models of the soft-particle scenes: classical Hertz, MC-strain with a list of
+// prefactors gamma and MC-stress with a list of prefactors beta (multicontact.md), read from
+//   [multicontact]  classical = true   strain_gamma = [1.0, 1.12]   stress_beta = [1.0, 1.65]
+//                   own_contact = false   mean = false   walls = true
+// The three options are the choices the source leaves open; their values go to summary.json
+// with the other parameters.
+#pragma once
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/scene_file.hpp"
+#include "kernels/multicontact.hpp"
+#include "scenarios/common/materials.hpp"
+
+namespace granular {
+
+struct SoftModel {
+  std::string label;  // "classical", "mc_strain_gamma_1.12", "mc_stress_beta_1.65"
+  MultiContact mc;
+};
+
+// The law's elastic constants per species slot, from the materials in those slots.
+inline MultiContact with_materials(MultiContact mc, const MaterialSet& m) {
+  for (int k = 0; k < kMaxSpecies; ++k) mc.young[k] = 0, mc.poisson[k] = 0;
+  for (size_t k = 0; k < m.materials.size(); ++k)
+    mc.young[k] = m.materials[k].young, mc.poisson[k] = m.materials[k].poisson;
+  return mc;
+}
+
+inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const MaterialSet& m) {
+  MultiContact base;
+  base.own_contact = s.flag("multicontact.own_contact", false);
+  base.mean = s.flag("multicontact.mean", false);
+  base.walls = s.flag("multicontact.walls", true);
+  base = with_materials(base, m);
+  std::vector<SoftModel> out;
+  auto label = [](const char* what, double v) {
+    std::ostringstream o;
+    o << what << v;
+    return o.str();
+  };
+  if (s.flag("multicontact.classical", true)) out.push_back({"classical", base});
+  for (double g : s.reals("multicontact.strain_gamma", {1.0})) {
+    s.require(g > 0, "multicontact.strain_gamma", "must be positive");
+    SoftModel sm{label("mc_strain_gamma_", g), base};
+    sm.mc.mode = MultiContact::Strain, sm.mc.gamma = g;
+    out.push_back(sm);
+  }
+  for (double b : s.reals("multicontact.stress_beta", {1.0})) {
+    s.require(b > 0, "multicontact.stress_beta", "must be positive");
+    SoftModel sm{label("mc_stress_beta_", b), base};
+    sm.mc.mode = MultiContact::Stress, sm.mc.beta = b;
+    out.push_back(sm);
+  }
+  return out;
+}
+
+}  // namespace granular

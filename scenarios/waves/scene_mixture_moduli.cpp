@@ -1,0 +1,542 @@
+// Scene `mixture_moduli`: elastic moduli of glass-rubber (stiff-soft) mixtures against the
+// rubber volume fraction and the confining pressure (mixtures-and-waves.md §2, "M(P, nu_r)
+// tables"). Per mixture: a random gas in a periodic box, compressed to jamming, then driven
+// by an isotropic pressure servo through the listed pressures in ascending order (one
+// sample, loading branch); at each pressure the relaxed state is probed like the element
+// tests of `elastic_moduli` (K from isotropic, G from pure-shear, M from uniaxial strain,
+// sliding switched off), next to K + 4G/3, the packing's bulk density and V_p = sqrt(M/rho).
+// Per mixture M ∝ P^n is fitted. The pair rule for unlike species (harmonic 2pq/(p + q) or
+// the source's pq/(p + q)) is compared on one mixture: the same packing re-probed with the
+// other rule, and a packing prepared and probed with it.
+//
+// Keys (besides [materials.*] and [contact] pair_rule, see mixture_materials.hpp):
+//   [mixture]      stiff_material = "glass"   soft_material = "rubber"
+//                  soft_volume_fractions = [0, 0.1, ...]
+//   [particles]    count   diameter_min   diameter_max   seed
+//   [preparation]  phi_gas = 0.3   phi_0 = 0.55 (end of the fast gas compression)
+//                  gas_strain_rate (volumetric, per us)   gas_relax_time (us)
+//                  approach_strain_rate (from phi_0 until P reaches the first pressure)
+//                  pressures = [...] (MPa)   tolerance   ekin_ratio   response_crossings
+//                  max_step   check_crossings   max_checks   max_phase_steps
+//   [damping]      gas_time (us, background damping time of the gas stages)
+//                  crossing_fraction (background damping time in crossing times, afterwards)
+//   [probe]        amplitude   strain_crossings   relax_crossings   keep_friction = false
+//   [pair_rule_check] soft_volume_fraction   pressures (subsets of the lists above)
+//   [run]          dt   skin   max_overlap   rattler_threshold
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "core/rng.hpp"
+#include "scenarios/common/config_state.hpp"
+#include "scenarios/common/element_test.hpp"
+#include "scenarios/common/packing.hpp"
+#include "scenarios/common/power_law_fit.hpp"
+#include "scenarios/common/pressure_servo.hpp"
+#include "scenarios/moduli/moduli_outputs.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/mixture_materials.hpp"
+
+namespace granular {
+
+namespace {
+using Exec = Kokkos::DefaultExecutionSpace;
+using System = DemSystem<Exec, MixtureModel>;
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// One prepared sample: a soft fraction, a pair rule and the pressures it is taken to.
+struct Variant {
+  double soft_fraction = 0;
+  std::string rule;
+  std::vector<double> pressures;
+  std::string tag;
+};
+
+struct Setup {
+  MixtureMaterials mats;
+  int stiff = 0, soft = 1;
+  std::vector<double> fractions;
+  GasSpec gas;
+  double phi0 = 0.55, gas_rate = 0, gas_relax_time = 0, approach_rate = 0;
+  std::vector<double> pressures;
+  ServoSettings servo;
+  double gas_damping_time = 0, damping_crossings = 0.5;
+  double amplitude = 2e-6, strain_crossings = 1, relax_crossings = 2;
+  bool keep_friction = false;
+  double check_fraction = kNaN;
+  std::vector<double> check_pressures;
+  std::string other_rule;
+  DemParams params;
+  std::vector<Variant> variants;
+};
+
+bool listed(const std::vector<double>& list, double v) {
+  return std::any_of(list.begin(), list.end(), [v](double x) { return std::fabs(x - v) < 1e-12; });
+}
+
+Setup read_setup(const SceneFile& s) {
+  Setup u;
+  u.mats = MixtureMaterials::read(s);
+  u.stiff = u.mats.slot(s, "mixture.stiff_material", s.text("mixture.stiff_material"));
+  u.soft = u.mats.slot(s, "mixture.soft_material", s.text("mixture.soft_material"));
+  s.require(u.stiff != u.soft, "mixture.soft_material", "must differ from mixture.stiff_material");
+  u.fractions = s.reals("mixture.soft_volume_fractions");
+  s.require(!u.fractions.empty(), "mixture.soft_volume_fractions",
+            "needs at least one volume fraction");
+  for (double f : u.fractions)
+    s.require(f >= 0 && f <= 1, "mixture.soft_volume_fractions", "must lie in [0, 1]");
+
+  GasSpec& g = u.gas;
+  g.count = s.count("particles.count", 16, kDemBytesPerParticle);
+  g.diameter_min = s.real("particles.diameter_min");
+  g.diameter_max = s.real("particles.diameter_max");
+  g.density = 1.0;  // per particle from its material
+  g.seed = static_cast<std::uint64_t>(s.integer("particles.seed", 1));
+  g.phi = s.real("preparation.phi_gas", 0.3);
+  check_gas(s, g, "preparation.phi_gas");
+  u.phi0 = s.real("preparation.phi_0", 0.55);
+  s.require(u.phi0 > g.phi && u.phi0 < 0.6, "preparation.phi_0",
+            "must lie between preparation.phi_gas and 0.6 (below frictional jamming)");
+  u.gas_rate = s.real("preparation.gas_strain_rate");
+  u.gas_relax_time = s.real("preparation.gas_relax_time");
+  u.approach_rate = s.real("preparation.approach_strain_rate");
+  s.require(u.gas_rate > 0 && u.gas_rate < 0.1, "preparation.gas_strain_rate",
+            "must lie in (0, 0.1) per us");
+  s.require(u.gas_relax_time >= 0, "preparation.gas_relax_time", "must not be negative");
+  s.require(u.approach_rate > 0 && u.approach_rate <= u.gas_rate,
+            "preparation.approach_strain_rate", "must lie in (0, preparation.gas_strain_rate]");
+  u.pressures = s.reals("preparation.pressures");
+  s.require(!u.pressures.empty(), "preparation.pressures", "needs at least one pressure");
+  for (size_t k = 0; k < u.pressures.size(); ++k) {
+    s.require(u.pressures[k] > 0, "preparation.pressures", "must be positive (MPa)");
+    s.require(k == 0 || u.pressures[k] > u.pressures[k - 1], "preparation.pressures",
+              "must increase (one sample is taken up through them: the loading branch)");
+  }
+  ServoSettings& sv = u.servo;
+  sv.tolerance = s.real("preparation.tolerance", 0.02);
+  sv.ekin_ratio = s.real("preparation.ekin_ratio", 1e-6);
+  sv.response_crossings = s.real("preparation.response_crossings", 2.0);
+  sv.max_step = s.real("preparation.max_step", 0.002);
+  sv.check_crossings = s.real("preparation.check_crossings", 0.25);
+  sv.max_cycles = static_cast<int>(s.integer("preparation.max_checks", 2000));
+  sv.max_phase_steps = s.integer("preparation.max_phase_steps", 50000);
+  s.require(sv.tolerance > 0 && sv.tolerance < 0.5, "preparation.tolerance",
+            "must lie in (0, 0.5)");
+  s.require(sv.ekin_ratio > 0, "preparation.ekin_ratio", "must be positive");
+  s.require(sv.response_crossings > 0, "preparation.response_crossings", "must be positive");
+  s.require(sv.max_step > 0 && sv.max_step < 0.1, "preparation.max_step", "must lie in (0, 0.1)");
+  s.require(sv.check_crossings > 0, "preparation.check_crossings", "must be positive");
+  s.require(sv.max_cycles >= 1, "preparation.max_checks", "must be at least 1");
+  s.require(sv.max_phase_steps >= sv.min_phase_steps, "preparation.max_phase_steps",
+            "must be at least 100");
+
+  u.gas_damping_time = s.real("damping.gas_time");
+  u.damping_crossings = s.real("damping.crossing_fraction", 0.5);
+  s.require(u.gas_damping_time > 0, "damping.gas_time", "must be positive");
+  s.require(u.damping_crossings > 0, "damping.crossing_fraction", "must be positive");
+
+  u.amplitude = s.real("probe.amplitude", 2e-6);
+  u.strain_crossings = s.real("probe.strain_crossings", 1.0);
+  u.relax_crossings = s.real("probe.relax_crossings", 2.0);
+  u.keep_friction = s.flag("probe.keep_friction", false);
+  s.require(u.amplitude > 0 && u.amplitude < 1e-3, "probe.amplitude", "must lie in (0, 1e-3)");
+  s.require(u.strain_crossings > 0, "probe.strain_crossings", "must be positive");
+  s.require(u.relax_crossings >= 0, "probe.relax_crossings", "must not be negative");
+
+  u.params.dt = s.real("run.dt");
+  u.params.skin = s.real("run.skin");
+  u.params.max_overlap = s.real("run.max_overlap", 0.3);
+  u.params.rattler_threshold = static_cast<int>(s.integer("run.rattler_threshold", 4));
+  s.require(u.params.dt > 0, "run.dt", "must be positive");
+  s.require(u.params.skin > 0, "run.skin", "must be positive");
+  s.require(u.params.max_overlap > 0 && u.params.max_overlap < 0.5, "run.max_overlap",
+            "must lie in (0, 0.5)");
+
+  u.other_rule = u.mats.pair_rule == "harmonic" ? "product_over_sum" : "harmonic";
+  if (s.has("pair_rule_check.soft_volume_fraction") || s.has("pair_rule_check.pressures")) {
+    u.check_fraction = s.real("pair_rule_check.soft_volume_fraction");
+    u.check_pressures = s.reals("pair_rule_check.pressures");
+    s.require(u.check_fraction > 0 && u.check_fraction < 1 && listed(u.fractions, u.check_fraction),
+              "pair_rule_check.soft_volume_fraction",
+              "must be one of mixture.soft_volume_fractions strictly between 0 and 1 (a mixture "
+              "has unlike contacts)");
+    s.require(!u.check_pressures.empty(), "pair_rule_check.pressures",
+              "needs at least one pressure");
+    for (double p : u.check_pressures)
+      s.require(p > 0 && listed(u.pressures, p), "pair_rule_check.pressures",
+                "must be positive and listed in preparation.pressures");
+    std::sort(u.check_pressures.begin(), u.check_pressures.end());
+  }
+  s.reject_unknown_keys();
+
+  for (double f : u.fractions) {
+    char tag[64];
+    std::snprintf(tag, sizeof tag, "nu%.3f_%s", f, u.mats.pair_rule.c_str());
+    u.variants.push_back({f, u.mats.pair_rule, u.pressures, tag});
+  }
+  if (!u.check_pressures.empty()) {
+    char tag[64];
+    std::snprintf(tag, sizeof tag, "nu%.3f_%s", u.check_fraction, u.other_rule.c_str());
+    u.variants.push_back({u.check_fraction, u.other_rule, u.check_pressures, tag});
+  }
+  return u;
+}
+
+// The gas of one mixture: the same sizes and positions for every fraction (same seed), the
+// soft species given to exactly round(nu N) particles chosen by a random permutation (equal
+// size distributions, so number and volume fractions agree).
+HostParticles mixture_gas(const Setup& u, double soft_fraction, PeriodicBox& box) {
+  HostParticles h = random_gas(u.gas, box);
+  const int n = h.size();
+  std::vector<std::pair<double, int>> order(n);
+  for (int i = 0; i < n; ++i) order[i] = {Stream(u.gas.seed + 7919, i).uniform(), i};
+  std::sort(order.begin(), order.end());
+  const int soft = static_cast<int>(std::round(soft_fraction * n));
+  for (int k = 0; k < n; ++k) {
+    const int i = order[k].second;
+    h.species[i] = k < soft ? u.soft : u.stiff;
+    h.density[i] = u.mats.materials[h.species[i]].density;
+  }
+  return h;
+}
+
+double total_mass(const HostParticles& h) {
+  double m = 0;
+  for (int i = 0; i < h.size(); ++i)
+    m += h.density[i] * 4.0 / 3.0 * M_PI * std::pow(h.radius[i], 3);
+  return m;
+}
+
+double longest_edge(const PeriodicBox& b) { return std::max({b.len[0], b.len[1], b.len[2]}); }
+
+// Background damping with time constant tau (translational m/tau, rotational 0.1 m d^2/tau
+// as in the wave scene), for the mean particle mass m and diameter d.
+DemParams with_damping(DemParams p, double tau, double m, double d) {
+  p.damping.translational = m / tau;
+  p.damping.rotational = 0.1 * m * d * d / tau;
+  return p;
+}
+
+MixtureModel with_friction(MixtureModel m, double mu) {
+  for (auto& row : m.tangential.table.p)
+    for (auto& q : row) q.mu_s = q.mu_d = mu;
+  return m;
+}
+MixtureModel without_sliding(const MixtureModel& m) { return with_friction(m, INFINITY); }
+
+struct Probed {
+  Moduli mod;
+  double reversal = kNaN;
+  long strain_steps = 0, relax_steps = 0;
+};
+
+Probed probe_state(const ConfigState& c, const MixtureModel& model, const DemParams& params,
+                   const Setup& u, double tc) {
+  Probed r;
+  const ServoSettings bounds = u.servo;
+  r.strain_steps = phase_steps(u.strain_crossings, tc, params.dt, bounds);
+  r.relax_steps = u.relax_crossings > 0 ? phase_steps(u.relax_crossings, tc, params.dt, bounds) : 0;
+  auto make = [&] { return restart_system<System>(c, model, params); };
+  r.mod = probe_moduli_restarting(make, u.amplitude, r.strain_steps, r.relax_steps, &r.reversal);
+  return r;
+}
+
+// Prepares one variant and probes it at each of its pressures; rows go to `out`.
+void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress& progress,
+                 long& done) {
+  const MixtureModel model = u.mats.model(v.rule);
+  const MixtureModel probe_model = u.keep_friction ? model : without_sliding(model);
+  // The same packing probed with the other rule (the probing model alone differs).
+  const bool reprobe = v.rule == u.mats.pair_rule && v.soft_fraction == u.check_fraction;
+  const MixtureModel other = u.mats.model(u.other_rule);
+  const MixtureModel other_probe = u.keep_friction ? other : without_sliding(other);
+
+  PeriodicBox box;
+  const HostParticles host = mixture_gas(u, v.soft_fraction, box);
+  const double mass = total_mass(host);
+  double dsum = 0, vsolid = 0;
+  for (int i = 0; i < host.size(); ++i)
+    dsum += 2 * host.radius[i], vsolid += 4.0 / 3.0 * M_PI * std::pow(host.radius[i], 3);
+  const double dbar = dsum / host.size(), mbar = mass / host.size();
+  const double rho_solid = mass / vsolid;
+  std::optional<System> sys;
+  sys.emplace(Particles<Exec>::from_host(host), box, model,
+              with_damping(u.params, u.gas_damping_time, mbar, dbar));
+  // Gas: fast compression to phi_0, a relaxation, then a slower one until the packing carries
+  // the first pressure (the servo takes over from there).
+  strain_to_phi(*sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
+  sys->step(static_cast<long>(std::ceil(u.gas_relax_time / u.params.dt)));
+  compress_to_pressure(*sys, v.pressures.front(), u.approach_rate, 20, 0.74);
+
+  for (double target : v.pressures) {
+    // Damping scaled with the crossing time this packing will have at the target
+    // (K ∝ P^{1/3} for Hertz, so t_c ∝ P^{-1/6}).
+    Measurements m = sys->measure();
+    double rho = mass / sys->box().volume();
+    double tc = crossing_time(m, rho, longest_edge(sys->box()));
+    if (std::isfinite(tc) && m.pressure > 0) tc *= std::pow(m.pressure / target, 1.0 / 6.0);
+    if (!std::isfinite(tc)) tc = u.servo.max_phase_steps * u.params.dt;
+    const DemParams params = with_damping(u.params, u.damping_crossings * tc, mbar, dbar);
+    {
+      const ConfigState c = snapshot(*sys, host.density, m.pressure);
+      sys.emplace(restart_system<System>(c, model, params));
+    }
+    const ServoResult sr = servo_to_pressure(*sys, target, rho, u.servo);
+    m = sr.m;
+    rho = mass / sys->box().volume();
+    tc = crossing_time(m, rho, longest_edge(sys->box()));
+    if (!sr.converged)
+      std::cerr << v.tag << ": the servo did not reach P = " << target << " MPa within "
+                << u.servo.max_cycles << " checks (P = " << m.pressure
+                << ", E_kin/E_pot = " << sr.ekin_ratio << "); probed as it is\n";
+    const ConfigState c = snapshot(*sys, host.density, m.pressure);
+    const bool jammed = is_jammed(m) && std::isfinite(tc);
+    Probed pr;
+    if (jammed) pr = probe_state(c, probe_model, params, u, tc);
+    double M_other = kNaN;
+    if (jammed && reprobe && listed(u.check_pressures, target))
+      M_other = probe_state(c, other_probe, params, u, tc).mod.M;
+    const Moduli& mod = pr.mod;
+    const double mkg = mod.K + 4 * mod.G / 3;
+    std::map<std::string, double> row = {
+        {"soft_fraction", v.soft_fraction},
+        {"pair_rule_product_over_sum", v.rule == "product_over_sum" ? 1.0 : 0.0},
+        {"pressure_target", target},
+        {"pressure", m.pressure},
+        {"servo_converged", sr.converged ? 1.0 : 0.0},
+        {"servo_checks", static_cast<double>(sr.cycles)},
+        {"servo_steps", static_cast<double>(sr.steps)},
+        {"ekin_over_epot", sr.ekin_ratio},
+        {"jammed", jammed ? 1.0 : 0.0},
+        {"particles", static_cast<double>(c.size())},
+        {"phi", m.phi},
+        {"z_corrected", m.z_corrected},
+        {"z_mean", m.z},
+        {"rattler_fraction", m.rattlers / m.particles},
+        {"max_overlap", m.max_overlap},
+        {"rho_bulk", rho},
+        {"rho_solid", rho_solid},
+        {"crossing_time", tc},
+        {"damping_time", u.damping_crossings * tc},
+        {"probe_strain_steps", static_cast<double>(pr.strain_steps)},
+        {"probe_relax_steps", static_cast<double>(pr.relax_steps)},
+        {"K", jammed ? mod.K : 0.0},
+        {"G", jammed ? mod.G : 0.0},
+        {"M", jammed ? mod.M : 0.0},
+        {"M_KG", jammed ? mkg : 0.0},
+        {"M_over_M_KG", jammed ? mod.M / mkg : kNaN},
+        {"Vp", jammed && mod.M > 0 ? 1000.0 * std::sqrt(mod.M / rho) : 0.0},  // m/s
+        {"isotropic_reversal_residual", pr.reversal},
+        {"M_other_rule_same_packing", M_other},
+    };
+    out.add_row(v.tag, row);
+    progress.update(++done);
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "%s  P %.4g MPa (target %.4g, %d checks)  phi %.4f  Z %.3f  K %.4g  G %.4g  "
+                  "M %.4g MPa  M/(K+4G/3) %.4f  Vp %.0f m/s\n",
+                  v.tag.c_str(), m.pressure, target, sr.cycles, m.phi, m.z_corrected, mod.K, mod.G,
+                  mod.M, jammed ? mod.M / mkg : kNaN, row["Vp"]);
+    if (progress.enabled()) std::cerr << line;
+  }
+}
+
+}  // namespace
+
+void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
+
+void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup u = read_setup(scene);
+  if (!begin_outputs(opts)) return;
+  // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
+  // when every variant is done, so an interrupted run leaves nothing that looks finished.
+  const std::string parts = opts.out_dir + "/variants";
+  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
+  if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
+    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
+                     "--resume, or remove that directory (or choose another --out) to start over");
+  make_directories(parts);
+  for (const char* f : {"/summary.json", "/results.h5"})
+    std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
+
+  long total = 0, done = 0;
+  for (const Variant& v : u.variants) total += static_cast<long>(v.pressures.size());
+  Progress progress("mixtures", total, opts.progress);
+  const auto start = std::chrono::steady_clock::now();
+  ModuliOutputs out;
+  for (size_t k = 0; k < u.variants.size(); ++k) {
+    const Variant& v = u.variants[k];
+    const std::string name = "variant_" + std::to_string(k) + "_" + v.tag;
+    ModuliOutputs part;
+    if (opts.resume && load_moduli_part(parts, name, fingerprint, part)) {
+      std::cerr << v.tag << ": taken from the checkpoint in " << parts << "\n";
+      out.append(part);
+      progress.update(done += static_cast<long>(v.pressures.size()));
+      continue;
+    }
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+    if (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes) {
+      std::cerr << "stopped after " << k << " of " << u.variants.size()
+                << " variants (--stop-after-minutes); continue with --resume\n";
+      return;
+    }
+    run_variant(u, v, part, progress, done);
+    save_moduli_part(parts, name, fingerprint, part);
+    out.append(part);
+  }
+  progress.finish();
+
+  // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its jammed configurations.
+  const auto& T = out.table;
+  const size_t rows = T.at("M").size();
+  Json fits = Json::array();
+  std::map<std::string, std::vector<double>> fit_cols;
+  for (const Variant& v : u.variants) {
+    if (v.rule != u.mats.pair_rule) continue;
+    std::vector<double> P, M, K, G, MKG;
+    for (size_t i = 0; i < rows; ++i)
+      if (T.at("soft_fraction")[i] == v.soft_fraction &&
+          T.at("pair_rule_product_over_sum")[i] == (v.rule == "product_over_sum" ? 1.0 : 0.0) &&
+          T.at("jammed")[i] > 0) {
+        P.push_back(T.at("pressure")[i]), M.push_back(T.at("M")[i]);
+        K.push_back(T.at("K")[i]), G.push_back(T.at("G")[i]), MKG.push_back(T.at("M_KG")[i]);
+      }
+    Json j = Json::object();
+    j["soft_fraction"] = v.soft_fraction;
+    const std::pair<const char*, const std::vector<double>*> series[] = {
+        {"M", &M}, {"K", &K}, {"G", &G}, {"M_KG", &MKG}};
+    for (const auto& [name, y] : series) {
+      const PowerLawFit f = fit_power_law(P, *y);
+      Json fj = Json::object();
+      fj["points"] = f.points, fj["exponent"] = f.exponent;
+      fj["exponent_stderr"] = f.exponent_stderr, fj["prefactor_MPa"] = f.prefactor;
+      fj["rms_log_residual"] = f.rms_log_residual;
+      j[std::string("fit_") + name] = fj;
+      fit_cols[std::string(name) + "_exponent"].push_back(f.exponent);
+      fit_cols[std::string(name) + "_exponent_stderr"].push_back(f.exponent_stderr);
+      fit_cols[std::string(name) + "_prefactor"].push_back(f.prefactor);
+    }
+    fit_cols["soft_fraction"].push_back(v.soft_fraction);
+    fits.push(j);
+  }
+
+  // The pair-rule comparison at the check fraction and pressures.
+  Json rule = Json::object();
+  if (!u.check_pressures.empty()) {
+    rule["soft_volume_fraction"] = u.check_fraction;
+    rule["rule"] = u.mats.pair_rule;
+    rule["other_rule"] = u.other_rule;
+    Json list = Json::array();
+    for (double p : u.check_pressures) {
+      double M_main = kNaN, M_same = kNaN, M_own = kNaN, P_main = kNaN, P_own = kNaN;
+      for (size_t i = 0; i < rows; ++i) {
+        if (T.at("soft_fraction")[i] != u.check_fraction || T.at("pressure_target")[i] != p)
+          continue;
+        const bool other = T.at("pair_rule_product_over_sum")[i] ==
+                           (u.other_rule == "product_over_sum" ? 1.0 : 0.0);
+        if (other) {
+          M_own = T.at("M")[i], P_own = T.at("pressure")[i];
+        } else {
+          M_main = T.at("M")[i], M_same = T.at("M_other_rule_same_packing")[i];
+          P_main = T.at("pressure")[i];
+        }
+      }
+      Json e = Json::object();
+      e["pressure_target"] = p;
+      e["M_rule"] = M_main, e["pressure_rule"] = P_main;
+      e["M_other_rule_same_packing"] = M_same;
+      e["ratio_same_packing"] = M_same / M_main;
+      e["M_other_rule_own_packing"] = M_own, e["pressure_other_rule"] = P_own;
+      e["ratio_own_packing"] = M_own / M_main;
+      list.push(e);
+    }
+    rule["by_pressure"] = list;
+    rule["what_changes"] =
+        "the rule sets k_t, gamma_n, gamma_t and mu of unlike (stiff-soft) contacts; E* mixes "
+        "as 1/E* = sum (1 - nu^2)/E under both; like pairs keep their own values. "
+        "'same_packing' re-probes the packing prepared with the default rule (probing sees k_t "
+        "only, sliding being off); 'own_packing' prepares and probes with the other rule (its "
+        "smaller unlike friction also changes the packing)";
+  }
+
+  H5Writer h5(opts.out_dir + "/results.h5");
+  for (const auto& [k, v] : T) h5.write("/table/" + k, v);
+  for (const auto& [k, v] : fit_cols) h5.write("/fits/" + k, v);
+  h5.commit();
+
+  Json summary = Json::object();
+  summary["scene"] = "mixture_moduli";
+  summary["scene_file"] = scene.path();
+  Json& pj = summary["parameters"];
+  pj = Json::object();
+  for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
+  Json& ch = summary["choices"];
+  ch = Json::object();
+  Json mats = Json::object();
+  for (const MixtureMaterial& m : u.mats.materials) {
+    Json j = Json::object();
+    j["modulus_reading"] = m.modulus_key == "shear_modulus"
+                               ? "the source's moduli column read as the shear modulus "
+                                 "(default of mixtures-and-waves.md §3): E = 2 G (1 + nu)"
+                               : "the source's moduli column read as Young's modulus";
+    j["young_modulus_MPa"] = m.young;
+    mats[m.name] = j;
+  }
+  ch["materials"] = mats;
+  ch["E_star_MPa"] = Json::object();
+  {
+    Json& es = ch["E_star_MPa"];
+    const std::string a = u.mats.materials[u.stiff].name, b = u.mats.materials[u.soft].name;
+    es[a + "-" + a] = u.mats.effective_young(u.stiff, u.stiff);
+    es[a + "-" + b] = u.mats.effective_young(u.stiff, u.soft);
+    es[b + "-" + b] = u.mats.effective_young(u.soft, u.soft);
+  }
+  ch["pair_rule"] = u.mats.pair_rule;
+  ch["pair_rule_scope"] =
+      "k_t, gamma_n, gamma_t and mu of unlike species: harmonic 2pq/(p + q), product_over_sum "
+      "pq/(p + q); like pairs keep their own values; Hertz E* always from 1/E* = sum "
+      "(1 - nu^2)/E with R = a_i a_j/(a_i + a_j)";
+  ch["normal_damping"] =
+      "gamma sqrt(d delta) d(delta)/dt with d = a_i + a_j, as 2 gamma sqrt(R delta) "
+      "d(delta)/dt (exact for equal spheres); gamma in ug/(mm us) = kg/(m s)";
+  ch["bulk_density"] =
+      "rho = sum(particle density x particle volume) / box volume, measured per packing "
+      "(the packing's own density, about phi times the solids' density: M = rho V_p^2 "
+      "then matches the quasi-static M; rho_solid is reported beside it)";
+  ch["Vp"] = "sqrt(M / rho_bulk) with M from uniaxial probing, in m/s";
+  ch["probing"] =
+      "each mode (isotropic, pure shear in xy, uniaxial along x) restarts from the saved "
+      "state, against a reference run without strain of the same length; sliding switched "
+      "off (mu = inf) unless probe.keep_friction; strain and relaxation lengths in crossing "
+      "times L sqrt(rho/K_affine) of the configuration";
+  ch["configurations"] =
+      "picked at target pressures on the loading branch of one sample per mixture: gas "
+      "compressed to jamming, then the isotropic pressure servo (pressure_servo.hpp) until "
+      "|P/P_target - 1| < tolerance and E_kin/E_pot < ekin_ratio";
+  ch["fit"] =
+      "least squares of log M against log P over the jammed configurations of each mixture "
+      "(default pair rule); stderr = s / sqrt(sum (log P - mean)^2)";
+  summary["table"] = out.rows;
+  summary["fits"] = fits;
+  if (!u.check_pressures.empty()) summary["pair_rule_check"] = rule;
+  double lo = INFINITY, hi = -INFINITY;
+  for (size_t i = 0; i < rows; ++i)
+    if (T.at("jammed")[i] > 0)
+      lo = std::min(lo, T.at("M_over_M_KG")[i]), hi = std::max(hi, T.at("M_over_M_KG")[i]);
+  summary["M_over_K_plus_4G_3_range"] = std::vector<double>{lo, hi};
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
+  if (opts.charts) run_plot_script("mixture_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

@@ -1,0 +1,595 @@
+// Scene `wave_transmission`: virtual transducers (mixtures-and-waves.md §2). A packing of one
+// or more species between two frictionless walls along x, periodic in y and z, is brought by
+// a servo on the source wall to each wall stress sigma_xx of a list (loading branch) and
+// relaxed. From each relaxed state: a short velocity pulse of the source wall, recorded as
+// the receiver wall's force and the mean x-velocity of particle slabs (pickers -> V_p,
+// M = rho V_p^2, spectra, spectral-ratio Q between two slabs), repeated at other amplitudes
+// (linearity check) and time steps; and a quasi-static uniaxial probe by the source wall,
+// whose stress increment gives M directly for the same packing and boundary conditions.
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "core/rng.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/box_fill.hpp"
+#include "scenarios/common/config_state.hpp"
+#include "scenarios/common/snapshot_series.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/wave_setup.hpp"
+
+namespace granular {
+
+namespace {
+
+using Exec = Kokkos::DefaultExecutionSpace;
+
+// Source wall at x = xs (outward normal -x), receiver wall at x = box length (normal +x).
+std::vector<WallSpec> column_walls(const WaveSetup& w, const PeriodicBox& box, double xs) {
+  WallSpec src, rec;
+  src.name = "source", rec.name = "receiver";
+  src.material = rec.material = w.wall;
+  src.normal[0] = -1, src.normal[1] = src.normal[2] = 0;
+  rec.normal[0] = 1, rec.normal[1] = rec.normal[2] = 0;
+  src.point[0] = xs;
+  rec.point[0] = box.len[0];
+  return {src, rec};
+}
+
+// sigma_xx from the two wall forces (particles push the source wall to -x, the receiver to +x).
+double wall_stress(const std::vector<WallLoad>& loads, double area) {
+  return 0.5 * (loads[1].force[0] - loads[0].force[0]) / area;
+}
+
+struct Prepared {
+  ConfigState state;
+  double xs = 0, pressure = 0, gap = 0, phi = 0, rho_bulk = 0, rho_solid = 0;
+  double lateral_ratio = 0, z = 0, mean_overlap = 0, max_overlap = 0;
+  long steps = 0;
+};
+
+HostParticles gas(const WaveSetup& w, PeriodicBox& box) {
+  const double d = w.diameter;
+  box = PeriodicBox();
+  const double vol_p = M_PI / 6 * d * d * d * (1 + w.spread * w.spread);  // <d^3> of uniform
+  box.len[1] = box.len[2] = w.width * d;
+  box.len[0] = w.length * d;
+  const int n =
+      static_cast<int>(std::round(w.gas_phi * box.len[0] * box.len[1] * box.len[2] / vol_p));
+  for (int k = 0; k < 3; ++k) box.lo[k] = 0, box.periodic[k] = k != 0;
+  FillSpec f;
+  f.count = n, f.diameter_mean = d, f.diameter_spread = w.spread, f.seed = w.seed;
+  f.density = 1.0;
+  for (int k = 0; k < 3; ++k) f.lo[k] = 0, f.hi[k] = box.len[k];
+  HostParticles h = fill_region(f, box);
+  // Species: exactly round(nu_s N) particles each (equal size distributions, so number and
+  // volume fractions agree), assigned in the order of a random permutation of the particles.
+  std::vector<std::pair<double, int>> order(n);
+  for (int i = 0; i < n; ++i) order[i] = {Stream(w.seed + 7919, i).uniform(), i};
+  std::sort(order.begin(), order.end());
+  int next = 0;
+  double cum = 0;
+  for (size_t s = 0; s < w.species.size(); ++s) {
+    cum += w.fractions[s];
+    const int until = s + 1 == w.species.size() ? n : static_cast<int>(std::round(cum * n));
+    for (; next < until; ++next) {
+      const int i = order[next].second;
+      h.species[i] = w.species[s];
+      h.density[i] = w.mats.materials[w.species[s]].density;
+    }
+  }
+  return h;
+}
+
+double mean_mass_of(const ConfigState& c) {
+  double s = 0;
+  for (int i = 0; i < c.size(); ++i)
+    s += c.particles.density[i] * 4.0 / 3 * M_PI * std::pow(c.particles.radius[i], 3);
+  return s / std::max(1, c.size());
+}
+
+DemParams params_of(const WaveSetup& w, double damping_time, double mass) {
+  DemParams p;
+  p.dt = w.dt, p.skin = 0.05 * w.diameter, p.max_overlap = w.max_overlap;
+  p.damping.translational = damping_time > 0 ? mass / damping_time : 0.0;
+  p.damping.rotational =
+      damping_time > 0 ? 0.1 * mass * w.diameter * w.diameter / damping_time : 0.0;
+  return p;
+}
+
+// Loading branch: the servo drives the source wall until sigma_xx is within the tolerance
+// of each target, then the packing relaxes with the wall held; a state is kept per target.
+template <class Model>
+std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
+                              const std::vector<double>& density, const HostParticles& h,
+                              const PeriodicBox& box, const RunOptions& opts) {
+  const double m0 = [&] {
+    double s = 0;
+    for (int i = 0; i < h.size(); ++i)
+      s += h.density[i] * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+    return s / h.size();
+  }();
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model,
+                             params_of(w, w.damping_time, m0));
+  const double area = box.len[1] * box.len[2];
+  double xs = 0;
+  auto set_speed = [&](double v) {  // source wall moving at v (into the sample) from now on
+    auto walls = column_walls(w, box, xs);
+    walls[0].motion = WallMotion::Velocity;
+    walls[0].velocity[0] = v;
+    walls[0].point[0] = xs - v * sys.time();
+    sys.set_walls(walls);
+  };
+  set_speed(0.0);
+  std::vector<Prepared> out;
+  const long max_steps = static_cast<long>(w.max_time / w.dt);
+  for (double target : w.pressures) {
+    Progress progress("servo to " + std::to_string(target) + " MPa", max_steps, opts.progress);
+    long steps = 0;
+    double sigma = wall_stress(sys.wall_loads(), area);
+    auto advance = [&](double time) {
+      const long n = std::max<long>(1, static_cast<long>(std::ceil(time / w.dt)));
+      sys.step(n);
+      steps += n;
+      xs = sys.walls().host()(0).p[0];
+      sys.check_health(sys.measure());
+      sigma = wall_stress(sys.wall_loads(), area);
+      progress.update(steps);
+      if (steps > max_steps)
+        throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target) +
+                           " MPa within preparation.max_time (now " + std::to_string(sigma) +
+                           "): raise it, or preparation.wall_speed");
+    };
+    // A gas has no stiffness to aim with, and its wall force is a train of collisions: the
+    // wall runs at wall_speed until the volume fraction reaches gas_end_phi, whatever the
+    // force says.
+    const double vp = sys.particle_volume();
+    while (vp / ((box.len[0] - xs) * area) < w.gas_end_phi) {
+      set_speed(w.wall_speed);
+      advance(0.5 * w.damping_time);
+    }
+    // Then held states only: hold for relax_time, measure, and move the wall by 0.7 of the
+    // secant estimate from the last two held states (a fixed small push while the packing
+    // carries no load or the secant is not yet defined), at most max_push of the gap.
+    double x_prev = NAN, s_prev = NAN;
+    while (true) {
+      set_speed(0.0);
+      advance(w.relax_time);
+      if (std::abs(target - sigma) < w.tolerance * target) {
+        advance(w.final_relax_time);  // and still there after a long relaxation
+        if (std::abs(target - sigma) < w.tolerance * target) break;
+      }
+      const double gap = box.len[0] - xs, dmax = w.max_push * gap;
+      double dx = sigma > 0 ? 0.5 * dmax : dmax;
+      const double slope =
+          std::isfinite(s_prev) && xs != x_prev ? (sigma - s_prev) / (xs - x_prev) : 0;
+      if (slope > 0 && sigma > 0)
+        dx = 0.7 * (target - sigma) / slope;
+      else if (sigma > target)
+        dx = -0.5 * dmax;
+      dx = std::clamp(dx, -dmax, dmax);
+      x_prev = xs, s_prev = sigma;
+      const double v = std::copysign(std::min(w.wall_speed, std::abs(dx) / w.damping_time), dx);
+      set_speed(v);
+      advance(dx / v);
+    }
+    set_speed(0.0);
+    progress.finish();
+    Prepared p;
+    p.xs = xs, p.pressure = sigma, p.steps = steps;
+    p.gap = box.len[0] - xs;
+    const Measurements m = sys.measure();
+    p.phi = sys.particle_volume() / (p.gap * area);
+    double mass = 0, vol = 0;
+    for (int i = 0; i < h.size(); ++i) {
+      const double v = 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+      mass += density[i] * v, vol += v;
+    }
+    p.rho_bulk = mass / (p.gap * area);
+    p.rho_solid = mass / vol;
+    // measure() divides by the box volume, which includes the empty part behind the wall
+    const double vbox = box.len[0] * area;
+    p.lateral_ratio = 0.5 * (m.stress[1] + m.stress[2]) * vbox / (p.gap * area) / sigma;
+    p.z = m.z, p.max_overlap = m.max_overlap;
+    p.state = snapshot(sys, density, sigma);
+    std::cout << "prepared sigma_xx = " << sigma << " MPa: phi = " << p.phi << ", Z = " << m.z
+              << ", sigma_lat/sigma_xx = " << p.lateral_ratio << ", L = " << p.gap << " mm\n";
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+struct WaveRecord {
+  Trace source, force;         // source wall velocity, receiver wall force
+  std::vector<Trace> slabs;    // mean x-velocity per slab
+  std::vector<double> slab_x;  // slab centres, distance from the source wall
+  double seconds = 0;
+};
+
+template <class Model>
+WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& p,
+                        const PeriodicBox& box, double amplitude, double dt,
+                        SnapshotSeries* snapshots = nullptr) {
+  WaveSetup wd = w;
+  wd.dt = dt;
+  DemSystem<Exec, Model> sys(particles_from<Exec>(p.state), box, model, params_of(wd, 0.0, 1.0));
+  restore_history(sys, p.state);
+  auto walls = column_walls(w, box, p.xs);
+  // The pulse as a displacement table fine enough that its piecewise-constant velocity
+  // follows the shape (400 points over the pulse).
+  WallSpec& s = walls[0];
+  s.motion = WallMotion::Table;
+  const int np = 400;
+  const double t_end = w.pre_time + w.duration;
+  s.table_t.push_back(0.0), s.table_u.push_back(0.0);
+  for (int k = 0; k <= np; ++k) {
+    const double t = w.pre_time + k * (t_end - w.pre_time) / np;
+    s.table_t.push_back(t);
+    s.table_u.push_back(-pulse_displacement(w, amplitude, t));  // along the outward normal
+  }
+  sys.set_walls(walls);
+  const double area = box.len[1] * box.len[2];
+  // Slab membership by identity, fixed at the start (displacements are far below d).
+  WaveRecord r;
+  std::vector<std::vector<int>> member(w.slab_positions.size());
+  {
+    auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().x);
+    auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().id);
+    for (size_t k = 0; k < w.slab_positions.size(); ++k) {
+      const double c = p.xs + w.slab_positions[k] * p.gap, hw = 0.5 * w.slab_width * w.diameter;
+      r.slab_x.push_back(c - p.xs);
+      for (int i = 0; i < sys.particles().n; ++i)
+        if (std::abs(x(i, 0) - c) <= hw) member[k].push_back(id(i));
+      if (member[k].empty())
+        throw InputError("receivers.slab_width: the slab at " +
+                         std::to_string(w.slab_positions[k]) + " L holds no particle");
+    }
+  }
+  r.slabs.resize(member.size());
+  std::vector<int> slab_of(sys.particles().n, -1);
+  for (size_t k = 0; k < member.size(); ++k)
+    for (int i : member[k]) slab_of[i] = static_cast<int>(k);
+  auto vh = Kokkos::create_mirror_view(sys.particles().v);
+  auto idh = Kokkos::create_mirror_view(sys.particles().id);
+  auto sample = [&]() {
+    const double t = sys.time();
+    r.source.t.push_back(t), r.source.a.push_back(pulse_velocity(w, amplitude, t));
+    r.force.t.push_back(t), r.force.a.push_back(sys.wall_loads()[1].force[0] / area);
+    Kokkos::deep_copy(vh, sys.particles().v);
+    Kokkos::deep_copy(idh, sys.particles().id);
+    std::vector<double> sum(member.size(), 0.0);
+    for (int i = 0; i < sys.particles().n; ++i)
+      if (slab_of[idh(i)] >= 0) sum[slab_of[idh(i)]] += vh(i, 0);
+    for (size_t k = 0; k < member.size(); ++k)
+      r.slabs[k].t.push_back(t), r.slabs[k].a.push_back(sum[k] / member[k].size());
+  };
+  const long every = std::max<long>(1, static_cast<long>(std::round(w.sample_every * w.dt / dt)));
+  const long steps = static_cast<long>(std::ceil(w.record_time / dt));
+  const auto t0 = std::chrono::steady_clock::now();
+  sample();
+  if (snapshots) snapshots->sample(sys);
+  for (long st = 0; st < steps; st += every) {
+    sys.step(every);
+    sample();
+    if (snapshots) snapshots->sample(sys);
+  }
+  sys.check_health(sys.measure());
+  if (snapshots) snapshots->finish(sys);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+// The pulse's signals: the run with the pulse minus the same run without it. A relaxed
+// packing still moves (slow modes decay over many travel times), by as much as a linear-
+// regime pulse; both runs are deterministic, so the difference is the pulse's own response.
+template <class Model>
+WaveRecord transmit(const Model& model, const WaveSetup& w, const Prepared& p,
+                    const PeriodicBox& box, double amplitude, double dt,
+                    SnapshotSeries* snapshots = nullptr) {
+  WaveRecord r = transmit_raw(model, w, p, box, amplitude, dt, snapshots);
+  const WaveRecord base = transmit_raw(model, w, p, box, 0.0, dt);
+  for (int i = 0; i < r.force.size(); ++i) r.force.a[i] -= base.force.a[i];
+  for (size_t k = 0; k < r.slabs.size(); ++k)
+    for (int i = 0; i < r.slabs[k].size(); ++i) r.slabs[k].a[i] -= base.slabs[k].a[i];
+  r.seconds += base.seconds;
+  return r;
+}
+
+// Quasi-static uniaxial probe: sigma_xx after the source wall has moved in by strain x L
+// (ramped, then held), minus sigma_xx of a run without strain of the same length.
+template <class Model>
+double probe_m(const Model& model, const WaveSetup& w, const Prepared& p, const PeriodicBox& box) {
+  const double area = box.len[1] * box.len[2];
+  double sigma[2] = {0, 0};
+  for (int run = 0; run < 2; ++run) {
+    DemSystem<Exec, Model> sys(particles_from<Exec>(p.state), box, model,
+                               params_of(w, w.probe_damping_time, mean_mass_of(p.state)));
+    restore_history(sys, p.state);
+    auto walls = column_walls(w, box, p.xs);
+    if (run == 1) {
+      walls[0].motion = WallMotion::Table;
+      walls[0].table_t = {0.0, w.probe_ramp};
+      walls[0].table_u = {0.0, -w.probe_strain * p.gap};
+    }
+    sys.set_walls(walls);
+    sys.step(static_cast<long>(std::ceil(w.probe_ramp / w.dt)));
+    // average over the hold, sampled 20 times
+    const long hold = static_cast<long>(std::ceil(w.probe_hold / w.dt));
+    double acc = 0;
+    for (int k = 0; k < 20; ++k) {
+      sys.step(std::max<long>(1, hold / 20));
+      acc += wall_stress(sys.wall_loads(), area) / 20;
+    }
+    sys.check_health(sys.measure());
+    sigma[run] = acc;
+  }
+  return (sigma[1] - sigma[0]) / w.probe_strain;
+}
+
+}  // namespace
+
+namespace {
+
+const char* kPickers[3] = {"first_arrival", "first_peak", "first_trough"};
+
+// A signal without a picked first event has no spectrum: an empty one, reported as such.
+Spectrum safe_spectrum(const Trace& tr, const Picks& p, const SignalSettings& s) {
+  try {
+    return analyse_event(tr, p, s);
+  } catch (const std::exception& e) {
+    std::cerr << "warning: " << e.what() << "\n";
+    return energy_spectrum({0.0, 0.0}, tr.step(), 2);
+  }
+}
+
+// Travel times of one output against the input by each picker.
+Json travel_times(const Picks& in, const Picks& out, double length, double rho, double* vp_peak) {
+  Json j = Json::object();
+  for (const char* k : kPickers) {
+    const double t = picked_time(out, k) - picked_time(in, k);
+    Json e = Json::object();
+    e["travel_time"] = std::isfinite(t) ? Json(t) : Json();
+    e["V_p"] = std::isfinite(t) && t > 0 ? Json(length / t) : Json();
+    e["M"] = std::isfinite(t) && t > 0 ? Json(rho * length * length / (t * t)) : Json();
+    if (vp_peak && std::string(k) == "first_peak") *vp_peak = length / t;
+    j[k] = e;
+  }
+  return j;
+}
+
+// Travel times (source to receiver wall) and Q between the first and last slab of one run:
+// one point of the time-step and damping checks.
+Json numerics_entry(const WaveRecord& r, const WaveSetup& w, const Prepared& p) {
+  const Picks po = pick_travel_times(r.force, w.signals.picker);
+  const Picks pi = pick_travel_times(r.source, w.signals.picker);
+  Json e = Json::object();
+  e["travel"] = travel_times(pi, po, p.gap, p.rho_bulk, nullptr);
+  e["wall_seconds"] = r.seconds;
+  e["Q"] = Json();
+  if (r.slabs.size() >= 2) {
+    const size_t last = r.slabs.size() - 1;
+    try {
+      const Picks p0 = pick_travel_times(r.slabs[0], w.signals.picker);
+      const Picks p1 = pick_travel_times(r.slabs[last], w.signals.picker);
+      const SpectralRatioFit f = analyse_ratio(r.slabs[0], p0, r.slabs[last], p1, w.signals);
+      if (std::isfinite(f.q)) e["Q"] = f.q;
+      if (std::isfinite(f.q_error)) e["Q_error"] = f.q_error;
+    } catch (const std::exception& ex) {
+      e["Q"] = std::string("failed: ") + ex.what();
+    }
+  }
+  return e;
+}
+
+}  // namespace
+
+void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
+  const WaveSetup w = read_wave_setup(scene);
+  // ParaView time series of the reference pulse at each pressure (0: none): frames at the
+  // first receiver sample at or after every k steps.
+  const long snapshot_every = scene.integer("output.snapshot_every", 0);
+  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  scene.reject_unknown_keys();
+  if (!begin_outputs(opts)) return;
+  const auto wall0 = std::chrono::steady_clock::now();
+  PeriodicBox box;
+  const HostParticles h = gas(w, box);
+  std::vector<double> density(h.density);
+  MaterialSet prep_mats = w.mats;  // preparation friction on the particles' materials
+  for (int sp : w.species) prep_mats.materials[sp].friction = w.prep_friction;
+  std::vector<Prepared> states;
+  with_material_model(prep_mats,
+                      [&](const auto& m) { states = prepare(m, w, density, h, box, opts); });
+
+  H5Writer h5(opts.out_dir + "/results.h5");
+  Json summary = Json::object();
+  summary["scene"] = "wave_transmission";
+  summary["scene_file"] = scene.path();
+  Json& params = summary["parameters"];
+  params = Json::object();
+  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  summary["particles"] = h.size();
+  summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
+  summary["pair_rule"] = w.mats.pair_rule;
+  Json table = Json::array();
+  std::vector<double> col_p, col_phi, col_rho, col_vp, col_mwave, col_mprobe, col_q, col_qerr,
+      col_fdom;
+  for (size_t k = 0; k < states.size(); ++k) {
+    const Prepared& p = states[k];
+    const std::string g = "/pressure_" + std::to_string(k);
+    Json row = Json::object();
+    row["sigma_xx"] = p.pressure;
+    row["gap"] = p.gap;
+    row["phi"] = p.phi;
+    row["rho_bulk"] = p.rho_bulk;
+    row["rho_solid"] = p.rho_solid;
+    row["lateral_stress_ratio"] = p.lateral_ratio;
+    row["z"] = p.z;
+    row["max_overlap"] = p.max_overlap;
+    row["preparation_steps"] = p.steps;
+    double m_probe = 0;
+    with_material_model(w.mats, [&](const auto& m) { m_probe = probe_m(m, w, p, box); });
+    row["M_probe"] = m_probe;
+    // Waves at each amplitude (the first is the reference), then at smaller time steps.
+    Json amps = Json::array();
+    double fdom_mirrored = NAN;
+    WaveRecord ref;
+    Picks pin, pout;
+    double vp_peak = NAN;
+    for (size_t a = 0; a < w.amplitude_factors.size(); ++a) {
+      const double amp = w.velocity * w.amplitude_factors[a];
+      WaveRecord r;
+      SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
+                               a == 0 ? snapshot_every : 0);
+      with_material_model(
+          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
+      const Picks pi = pick_travel_times(r.source, w.signals.picker);
+      const Picks po = pick_travel_times(r.force, w.signals.picker);
+      Json e = Json::object();
+      e["amplitude"] = amp;
+      e["travel"] = travel_times(pi, po, p.gap, p.rho_bulk, a == 0 ? &vp_peak : nullptr);
+      e["wall_seconds"] = r.seconds;
+      if (a == 0) {
+        ref = r, pin = pi, pout = po;
+      } else {  // normalized receiver signals against the reference amplitude's
+        double num = 0, den = 0;
+        const double f = w.amplitude_factors[a];
+        for (int i = 0; i < r.force.size() && i < ref.force.size(); ++i) {
+          const double x = (r.force.a[i] - po.baseline) / f, y = ref.force.a[i] - pout.baseline;
+          num = std::max(num, std::abs(x - y)), den = std::max(den, std::abs(y));
+        }
+        e["normalized_signal_max_difference"] = num / den;
+        const double dtp = po.first_peak - pout.first_peak;
+        e["first_peak_time_difference"] = std::isfinite(dtp) ? Json(dtp) : Json();
+      }
+      amps.push(e);
+    }
+    row["amplitudes"] = amps;
+    row["travel"] = travel_times(pin, pout, p.gap, p.rho_bulk, nullptr);
+    write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals));
+    const Spectrum sf = safe_spectrum(ref.force, pout, w.signals);
+    write_signal(h5, g + "/receiver", ref.force, pout, sf);
+    row["receiver_spectrum"] = spectrum_json(sf);
+    {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
+       // its first peak, mirrored to a full period (mixtures-and-waves.md), has a dominant
+       // frequency of its own: the receiver's rise time as a frequency.
+      SignalSettings mirrored = w.signals;
+      mirrored.spectrum.window = EventWindow::Mirrored;
+      const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);
+      row["receiver_spectrum_mirrored"] = spectrum_json(sm);
+      fdom_mirrored = sm.dominant_frequency;
+      h5.write(g + "/receiver_mirrored/frequency", sm.f);
+      h5.write(g + "/receiver_mirrored/energy", sm.energy);
+    }
+    // Slabs: travel times, spectra, Q between the first and the last.
+    std::vector<Picks> ps;
+    Json slabs = Json::array();
+    for (size_t s = 0; s < ref.slabs.size(); ++s) {
+      ps.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
+      const Spectrum ss = safe_spectrum(ref.slabs[s], ps[s], w.signals);
+      write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss);
+      h5.attribute(g + "/slab_" + std::to_string(s), "distance", ref.slab_x[s]);
+      Json sj = Json::object();
+      sj["distance"] = ref.slab_x[s];
+      sj["picks"] = picks_json(ps[s]);
+      sj["travel"] = travel_times(pin, ps[s], ref.slab_x[s], p.rho_bulk, nullptr);
+      sj["spectrum"] = spectrum_json(ss);
+      slabs.push(sj);
+    }
+    row["slabs"] = slabs;
+    double q = NAN, qerr = NAN;
+    if (ref.slabs.size() >= 2) {
+      const size_t last = ref.slabs.size() - 1;
+      // Velocity between the slabs (no wall in the path) by each picker
+      Json between = Json::object();
+      for (const char* pk : kPickers) {
+        const double dtp = picked_time(ps[last], pk) - picked_time(ps[0], pk);
+        const double dx = ref.slab_x[last] - ref.slab_x[0];
+        between[pk] = std::isfinite(dtp) && dtp > 0 ? Json(dx / dtp) : Json();
+      }
+      row["V_p_between_slabs"] = between;
+      try {
+        const SpectralRatioFit f =
+            analyse_ratio(ref.slabs[0], ps[0], ref.slabs[last], ps[last], w.signals);
+        row["spectral_ratio"] = ratio_json(f);
+        h5.write(g + "/ratio/frequency", f.f);
+        h5.write(g + "/ratio/log_ratio", f.log_ratio);
+        h5.attribute(g + "/ratio", "slope", f.slope);
+        h5.attribute(g + "/ratio", "intercept", f.intercept);
+        q = f.q, qerr = f.q_error;
+      } catch (const std::exception& e) {
+        row["spectral_ratio"] = std::string("failed: ") + e.what();
+      }
+    }
+    // Numerics: travel time and Q against the time step, and against contact damping (how
+    // much of Q is the contacts' dissipation rather than scattering).
+    Json dts = Json::array();
+    for (double fct : w.dt_check) {
+      WaveRecord r;
+      with_material_model(
+          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt * fct); });
+      Json e = numerics_entry(r, w, p);
+      e["dt"] = w.dt * fct;
+      dts.push(e);
+    }
+    row["dt_check"] = dts;
+    Json rest = Json::array();
+    for (double e_r : w.restitution_check) {
+      MaterialSet mats = w.mats;
+      for (auto& mat : mats.materials) mat.restitution = e_r;
+      WaveRecord r;
+      with_material_model(mats,
+                          [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt); });
+      Json e = numerics_entry(r, w, p);
+      e["restitution"] = e_r;
+      rest.push(e);
+    }
+    row["restitution_check"] = rest;
+    {  // the reference run in the same form, for the charts
+      Json e = numerics_entry(ref, w, p);
+      e["dt"] = w.dt;
+      // Its restitution, when every material has the same one (a point of the damping check).
+      bool uniform = true;
+      for (const auto& mat : w.mats.materials)
+        uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
+      e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
+      row["reference_numerics"] = e;
+    }
+    const double m_wave = p.rho_bulk * vp_peak * vp_peak;
+    // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
+    row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
+    row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
+    std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
+              << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
+              << "\n";
+    table.push(row);
+    col_p.push_back(p.pressure), col_phi.push_back(p.phi), col_rho.push_back(p.rho_bulk);
+    col_vp.push_back(vp_peak), col_mwave.push_back(m_wave), col_mprobe.push_back(m_probe);
+    col_q.push_back(q), col_qerr.push_back(qerr), col_fdom.push_back(fdom_mirrored);
+    h5.attribute(g, "sigma_xx", p.pressure);
+    h5.attribute(g, "gap", p.gap);
+  }
+  summary["states"] = table;
+  h5.write("/table/sigma_xx", col_p);
+  h5.write("/table/phi", col_phi);
+  h5.write("/table/rho_bulk", col_rho);
+  h5.write("/table/V_p_first_peak", col_vp);
+  h5.write("/table/M_wave", col_mwave);
+  h5.write("/table/M_probe", col_mprobe);
+  h5.write("/table/Q", col_q);
+  h5.write("/table/Q_error", col_qerr);
+  h5.write("/table/receiver_dominant_frequency_mirrored", col_fdom);
+  h5.attribute("/", "states", static_cast<double>(states.size()));
+  summary["wall_seconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  h5.commit();
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  if (opts.charts)
+    run_plot_script("wave_transmission.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular

@@ -1,0 +1,153 @@
+#include "scenarios/waves/wave_setup.hpp"
+
+#include <cmath>
+
+namespace granular {
+
+WaveSetup read_wave_setup(const SceneFile& s) {
+  WaveSetup w;
+  w.mats = MaterialSet::read(s);
+  w.fractions = s.reals("mixture.volume_fractions");
+  // The scene reader holds lists of numbers only: the materials are one comma-separated text.
+  const std::string list = s.text("mixture.materials");
+  size_t pos = 0;
+  while (pos <= list.size()) {
+    size_t end = list.find(',', pos);
+    if (end == std::string::npos) end = list.size();
+    std::string name = list.substr(pos, end - pos);
+    while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+    while (!name.empty() && name.back() == ' ') name.pop_back();
+    const auto it = w.mats.slot.find(name);
+    s.require(it != w.mats.slot.end(), "mixture.materials",
+              "names no material of [materials] (\"" + name + "\")");
+    w.species.push_back(it->second);
+    pos = end + 1;
+  }
+  s.require(w.species.size() == w.fractions.size(), "mixture.volume_fractions",
+            "needs one fraction per material of mixture.materials");
+  double sum = 0;
+  for (double f : w.fractions) {
+    s.require(f >= 0, "mixture.volume_fractions", "must not be negative");
+    sum += f;
+  }
+  s.require(std::abs(sum - 1) < 1e-9, "mixture.volume_fractions", "must sum to 1");
+  for (int sp : w.species)
+    s.require(w.mats.materials[sp].density > 0 && !w.mats.materials[sp].rigid(),
+              "mixture.materials", "must name deformable materials with a positive density");
+  w.wall = w.mats.at(s, "mixture.wall_material");
+  s.require(w.mats.materials[w.wall].friction == 0, "mixture.wall_material",
+            "must be frictionless (friction = 0): wall contacts start fresh in every run");
+
+  w.length = s.real("column.length");
+  w.width = s.real("column.width");
+  w.diameter = s.real("column.diameter");
+  w.spread = s.real("column.spread", 0.05);
+  w.gas_phi = s.real("column.gas_volume_fraction", 0.35);
+  w.seed = s.integer("column.seed", 1);
+  s.require(w.length >= 4, "column.length", "must be at least 4 diameters");
+  s.require(w.width >= 3, "column.width", "must be at least 3 diameters (periodic images)");
+  s.require(w.diameter > 0, "column.diameter", "must be positive");
+  s.require(w.spread >= 0 && w.spread < 0.5, "column.spread", "must lie in [0, 0.5)");
+  s.require(w.gas_phi > 0.05 && w.gas_phi < 0.45, "column.gas_volume_fraction",
+            "must lie in (0.05, 0.45)");
+
+  w.pressures = s.reals("preparation.pressures");
+  s.require(!w.pressures.empty(), "preparation.pressures", "needs at least one pressure");
+  for (size_t k = 0; k < w.pressures.size(); ++k)
+    s.require(w.pressures[k] > 0 && (k == 0 || w.pressures[k] > w.pressures[k - 1]),
+              "preparation.pressures", "must be positive and increasing (loading branch)");
+  w.prep_friction = s.real("preparation.friction", 0.0);
+  w.wall_speed = s.real("preparation.wall_speed");
+  w.damping_time = s.real("preparation.damping_time");
+  w.tolerance = s.real("preparation.tolerance", 0.02);
+  w.relax_time = s.real("preparation.relax_time");
+  w.max_time = s.real("preparation.max_time");
+  w.gas_end_phi = s.real("preparation.gas_end_phi", 0.55);
+  w.max_push = s.real("preparation.max_push", 0.003);
+  w.final_relax_time = s.real("preparation.final_relax_time");
+  s.require(w.final_relax_time > 0, "preparation.final_relax_time", "must be positive");
+  s.require(w.gas_end_phi > w.gas_phi && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
+            "must lie between column.gas_volume_fraction and 0.64");
+  s.require(w.max_push > 0 && w.max_push < 0.05, "preparation.max_push", "must lie in (0, 0.05)");
+  s.require(w.prep_friction >= 0, "preparation.friction", "must not be negative");
+  s.require(w.wall_speed > 0, "preparation.wall_speed", "must be positive");
+  s.require(w.damping_time > 0, "preparation.damping_time", "must be positive");
+  s.require(w.tolerance > 0 && w.tolerance < 0.5, "preparation.tolerance", "must lie in (0, 0.5)");
+  s.require(w.relax_time > 0, "preparation.relax_time", "must be positive");
+  s.require(w.max_time > w.relax_time, "preparation.max_time", "must exceed relax_time");
+
+  w.shape = s.text("pulse.shape", "raised_cosine");
+  s.require(w.shape == "raised_cosine" || w.shape == "ricker", "pulse.shape",
+            "must be \"raised_cosine\" or \"ricker\"");
+  w.duration = s.real("pulse.duration");
+  w.velocity = s.real("pulse.velocity");
+  w.amplitude_factors = s.reals("pulse.amplitude_factors", {1.0, 2.0});
+  w.pre_time = s.real("pulse.pre_time");
+  w.record_time = s.real("pulse.record_time");
+  w.sample_every = s.integer("pulse.sample_every", 10);
+  s.require(w.duration > 0, "pulse.duration", "must be positive");
+  s.require(w.velocity > 0, "pulse.velocity", "must be positive");
+  s.require(!w.amplitude_factors.empty() && w.amplitude_factors.front() == 1.0,
+            "pulse.amplitude_factors", "must start with 1 (the reference amplitude)");
+  for (double f : w.amplitude_factors)
+    s.require(f > 0, "pulse.amplitude_factors", "must be positive");
+  s.require(w.pre_time > 0, "pulse.pre_time", "must be positive (the pickers' noise window)");
+  s.require(w.record_time > w.pre_time + w.duration, "pulse.record_time",
+            "must exceed pre_time + duration");
+  s.require(w.sample_every >= 1, "pulse.sample_every", "must be at least 1");
+
+  w.slab_positions = s.reals("receivers.slab_positions");
+  w.slab_width = s.real("receivers.slab_width", 2.0);
+  for (double x : w.slab_positions)
+    s.require(x > 0 && x < 1, "receivers.slab_positions", "must lie in (0, 1) (fractions of L)");
+  for (size_t k = 1; k < w.slab_positions.size(); ++k)
+    s.require(w.slab_positions[k] > w.slab_positions[k - 1], "receivers.slab_positions",
+              "must increase");
+  s.require(w.slab_width > 0, "receivers.slab_width", "must be positive");
+
+  w.probe_strain = s.real("probe.strain");
+  w.probe_ramp = s.real("probe.ramp_time");
+  w.probe_hold = s.real("probe.hold_time");
+  w.probe_damping_time = s.real("probe.damping_time");
+  s.require(w.probe_strain > 0 && w.probe_strain < 1e-3, "probe.strain", "must lie in (0, 1e-3)");
+  s.require(w.probe_ramp > 0, "probe.ramp_time", "must be positive");
+  s.require(w.probe_hold > 0, "probe.hold_time", "must be positive");
+  s.require(w.probe_damping_time > 0, "probe.damping_time", "must be positive");
+
+  w.dt = s.real("run.dt");
+  w.max_overlap = s.real("run.max_overlap", 0.05);
+  w.dt_check = s.reals("run.dt_check", {});
+  s.require(w.dt > 0, "run.dt", "must be positive");
+  s.require(w.max_overlap > 0 && w.max_overlap < 0.5, "run.max_overlap", "must lie in (0, 0.5)");
+  for (double f : w.dt_check) s.require(f > 0 && f <= 1, "run.dt_check", "factors in (0, 1]");
+  w.restitution_check = s.reals("run.restitution_check", {});
+  for (double e : w.restitution_check)
+    s.require(e > 0 && e <= 1, "run.restitution_check", "restitutions in (0, 1]");
+
+  w.signals = read_signal_settings(s, "analysis", w.pre_time);
+  return w;
+}
+
+double pulse_velocity(const WaveSetup& w, double a, double t) {
+  const double tau = t - w.pre_time;
+  if (w.shape == "ricker") {  // centred at duration/2 with peak frequency 2/duration
+    const double fp = 2.0 / w.duration, u = std::pow(M_PI * fp * (tau - 0.5 * w.duration), 2);
+    return tau < 0 ? 0.0 : a * (1 - 2 * u) * std::exp(-u);
+  }
+  if (tau <= 0 || tau >= w.duration) return 0.0;
+  return a * 0.5 * (1 - std::cos(2 * M_PI * tau / w.duration));
+}
+
+double pulse_displacement(const WaveSetup& w, double a, double t) {
+  const double tau = t - w.pre_time, T = w.duration;
+  if (tau <= 0) return 0.0;
+  if (w.shape == "ricker") {  // d/dt [s exp(-(pi fp s)^2)] = (1 - 2u) exp(-u), s = tau - T/2
+    const double fp = 2.0 / T, s = tau - 0.5 * T, s0 = -0.5 * T;
+    return a * (s * std::exp(-std::pow(M_PI * fp * s, 2)) -
+                s0 * std::exp(-std::pow(M_PI * fp * s0, 2)));
+  }
+  if (tau >= T) return a * 0.5 * T;
+  return a * (0.5 * tau - T / (4 * M_PI) * std::sin(2 * M_PI * tau / T));
+}
+
+}  // namespace granular
