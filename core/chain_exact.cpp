@@ -1,5 +1,6 @@
 #include "core/chain_exact.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -23,6 +24,20 @@ ChainExactSolution::ChainExactSolution(const std::vector<double>& b, const std::
     if (l >= 0) K_(l, l) -= k[c];
     if (r >= 0) K_(r, r) -= k[c];
     if (l >= 0 && r >= 0) K_(l, r) += k[c], K_(r, l) += k[c];
+  }
+  if (!periodic) {
+    // Between walls -K is tridiagonal, and so is A = M^{-1/2} (-K) M^{-1/2}: its symmetric
+    // tridiagonal eigensolver skips the dense reduction (several times faster at N ~ 1000).
+    // With A y = w^2 y and y^T y = 1, s = M^{-1/2} y has s^T M s = 1.
+    Eigen::VectorXd diag(N), off(std::max(N - 1, 0)), scale(N);
+    for (int i = 0; i < N; ++i) scale(i) = 1.0 / std::sqrt(b[i]), diag(i) = -K_(i, i) / b[i];
+    for (int i = 0; i + 1 < N; ++i) off(i) = -K_(i, i + 1) * scale(i) * scale(i + 1);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+    es.computeFromTridiagonal(diag, off, Eigen::ComputeEigenvectors);
+    if (es.info() != Eigen::Success) throw PhysicsError("exact chain solution: eigensolver failed");
+    S_ = scale.asDiagonal() * es.eigenvectors();
+    omega_ = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    return;
   }
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(-K_, M_);
   if (es.info() != Eigen::Success) throw PhysicsError("exact chain solution: eigensolver failed");

@@ -291,6 +291,50 @@ TEST(ChainScene, LateTimeAnalysisEndsBeforeTheFrontReflects) {
   std::filesystem::remove_all(opts.out_dir);
 }
 
+namespace {
+// The ensemble-mean bead energies (all samples) of a linearized chain_impulse run, and the
+// worst energy drift, with the given [time] table.
+struct ImpulseRun {
+  std::vector<double> te, drift;
+};
+ImpulseRun linear_impulse(const std::string& time_table, const std::string& tag) {
+  const std::string text =
+      "scene = \"chain_impulse\"\n[chain]\nbeads = 48\nforce = \"linear\"\n"
+      "[disorder]\nxi = [0.2]\nrealizations = 5\n[impulse]\nv0 = 0.01\n[time]\n" +
+      time_table + "t_max = 30\nsample_every = 1.0\n[analysis]\nnear_source_beads = 10\n";
+  RunOptions opts;
+  opts.out_dir = granular::testing::temp_dir("chain_solver_" + tag);
+  opts.progress = false, opts.charts = false;
+  const SceneFile scene = SceneFile::parse(text, tag + ".toml");
+  (void)scene.text("scene");
+  run_chain_impulse(scene, opts);
+  const H5Reader r(opts.out_dir + "/results.h5");
+  ImpulseRun out{r.reals("/xi_0/te_mean"), r.reals("/xi_0/energy_drift")};
+  std::filesystem::remove_all(opts.out_dir);
+  return out;
+}
+}  // namespace
+
+// The exact solver of chain_impulse (eigenmodes of each realization, 5 of them: a partial
+// batch) against Verlet on the same linearized chains: Verlet converges to it at second
+// order in the time step, and the exact solution conserves energy to round-off.
+TEST(ChainScene, ExactSolverIsTheLimitOfVerletAndConservesEnergy) {
+  const ImpulseRun exact = linear_impulse("solver = \"exact\"\n", "exact");
+  const ImpulseRun coarse = linear_impulse("dt = 0.02\n", "verlet_coarse");
+  const ImpulseRun fine = linear_impulse("dt = 0.01\n", "verlet_fine");
+  ASSERT_EQ(exact.te.size(), 31u * 48u);
+  ASSERT_EQ(fine.te.size(), exact.te.size());
+  double scale = 0, err_coarse = 0, err_fine = 0;
+  for (size_t i = 0; i < exact.te.size(); ++i) {
+    scale = std::max(scale, std::abs(exact.te[i]));
+    err_coarse = std::max(err_coarse, std::abs(coarse.te[i] - exact.te[i]));
+    err_fine = std::max(err_fine, std::abs(fine.te[i] - exact.te[i]));
+  }
+  EXPECT_LT(err_fine / scale, 2e-3);
+  EXPECT_NEAR(err_coarse / err_fine, 4.0, 0.6);  // second order
+  for (double d : exact.drift) EXPECT_LT(d, 1e-12);
+}
+
 // The stability limit 2/omega_max from the Sturm bisection against the closed form of the
 // ordered chain with walls and against the eigensolver for a disordered chain; a time step
 // at the limit is refused before any step.

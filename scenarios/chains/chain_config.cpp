@@ -20,14 +20,24 @@ ChainScene read_chain_scene(const SceneFile& scene) {
   c.spec.min_mass = scene.real("disorder.min_mass", 0.0);
   scene.require(c.spec.min_mass >= 0 && c.spec.min_mass < 1, "disorder.min_mass",
                 "must be in [0, 1) (the mean mass is 1)");
-  c.dt = scene.real("time.dt");
+  const std::string solver = scene.text("time.solver", "verlet");
+  scene.require(solver == "verlet" || solver == "exact", "time.solver",
+                "must be \"verlet\" (the chain of chain.force, stepped) or \"exact\" (the "
+                "linearized chain's eigenmodes, evaluated at the sample times)");
+  c.exact = solver == "exact";
   c.sample_every = scene.real("time.sample_every");
+  scene.require(!c.exact || c.spec.force == ChainForce::Linear, "time.solver",
+                "\"exact\" solves the linearized chain: set chain.force = \"linear\"");
+  // The exact solution has no time step (and no stability limit: no mass floor needed).
+  c.dt = c.exact ? c.sample_every : scene.real("time.dt");
   c.energy_growth = scene.real("guard.energy_growth", 1e4);
   scene.require(c.spec.beads >= 2, "chain.beads", "must be at least 2");
   scene.require(c.realizations >= 1, "disorder.realizations", "must be at least 1");
   scene.require(!c.xis.empty(), "disorder.xi", "must list at least one disorder value");
   for (double xi : c.xis)
     scene.require(xi >= 0 && xi < 1, "disorder.xi", "values must be in [0, 1)");
+  scene.require(c.sample_every > 0, "time.sample_every", "must be positive");
+  if (c.exact) return c;
   scene.require(c.dt > 0, "time.dt", "must be positive");
   // 2/omega_max of the ordered chain; disorder lowers it further (lighter beads), which
   // the divergence guard catches at run time.

@@ -15,7 +15,8 @@ struct ChainScene {
   ChainSpec spec;            // xi is set per ensemble from `xis`
   std::vector<double> xis;   // disorder values, one ensemble each
   int realizations = 0;      // ensemble size
-  double dt = 0;             // Verlet time step (units of t_c)
+  bool exact = false;        // time.solver = "exact": the linearized chain's eigenmodes
+  double dt = 0;             // Verlet time step (units of t_c); the sample interval if exact
   double sample_every = 0;   // time between samples
   double energy_growth = 0;  // divergence guard factor
 };

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <memory>
 
+#include "core/chain_exact.hpp"
 #include "core/progress.hpp"
 #include "kernels/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
@@ -20,6 +22,121 @@ namespace granular {
 namespace {
 
 using Space = Kokkos::DefaultExecutionSpace;
+
+// What the analysis needs, sampled every time.sample_every from t = 0: the ensemble-mean
+// bead energies (samples+1 rows of N), centre of energy and squared width, the source
+// bead's energy as a mean and as each realization's fraction of its own initial energy, and
+// the worst relative drift of a realization's conserved energy.
+struct ImpulseSeries {
+  std::vector<double> times, profile, centre, width2, source_energy, source_ratio, drift;
+  double bead_steps = 0;  // Verlet work (0 for the exact solver)
+};
+
+ImpulseSeries impulse_verlet(const ChainScene& cs, int source, double v0, long samples,
+                             long per_sample, bool progress_on) {
+  const int N = cs.spec.beads;
+  ChainBatch<Space> c(cs.spec, ChainBatch<Space>::first(cs.realizations));
+  chain_set_impulse(c, source, v0);
+  chain_check_time_step(c, cs.dt);
+  chain_accelerations(c);
+  const auto t0 = chain_totals(c);
+  const auto& e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
+  Kokkos::View<double**, Kokkos::LayoutRight, Space::memory_space> te("te", c.R, N);
+  ImpulseSeries out;
+  out.times = {0.0}, out.centre = {static_cast<double>(source)}, out.width2 = {0.0};
+  out.drift = {0.0};
+  // Each realization's source energy against its own initial energy b_source v0^2 / 2.
+  const std::vector<double> source_mass = chain_bead_column<Space>(c.b, source);
+  auto record = [&] {
+    chain_bead_energies(c, te);
+    const auto mean = chain_ensemble_mean<Space>(te);
+    out.profile.insert(out.profile.end(), mean.begin(), mean.end());
+    out.source_energy.push_back(mean[source]);
+    const std::vector<double> e = chain_bead_column<Space>(te, source);
+    double sum = 0;
+    for (int r = 0; r < c.R; ++r) sum += e[r] / (0.5 * source_mass[r] * v0 * v0);
+    out.source_ratio.push_back(sum / c.R);
+  };
+  record();
+  Progress progress("chain_impulse xi=" + std::to_string(cs.spec.xi), samples, progress_on);
+  for (long s = 1; s <= samples; ++s) {
+    const auto t = chain_advance_guarded(c, cs.dt, per_sample, e0, cs.energy_growth);
+    record();
+    double R = 0, r2 = 0, worst = 0;
+    const auto& conserved = cs.spec.force == ChainForce::Hertz ? t.hertz : t.linear;
+    for (int r = 0; r < c.R; ++r) {
+      R += t.centre[r] / c.R, r2 += t.width2[r] / c.R;
+      worst = std::max(worst, std::abs(conserved[r] / e0[r] - 1));
+    }
+    out.times.push_back(c.time), out.centre.push_back(R), out.width2.push_back(r2);
+    out.drift.push_back(worst);
+    progress.update(s);
+  }
+  progress.finish();
+  out.bead_steps = double(c.R) * N * samples * per_sample;
+  return out;
+}
+
+// The linearized chain solved exactly (chain.md section 1): each realization's eigenmodes,
+// then the state at every sample time in closed form, so neither a time step nor a mass
+// floor limits it. Realizations go in batches of a fixed size, each batch's modes computed
+// in parallel, and the sums are taken in realization order: the result does not depend on
+// the thread count.
+ImpulseSeries impulse_exact(const ChainScene& cs, int source, double v0, long samples,
+                            bool progress_on) {
+  using Host = Kokkos::DefaultHostExecutionSpace;
+  const int R = cs.realizations, N = cs.spec.beads, batch = 8;
+  const long T = samples + 1;
+  const bool periodic = cs.spec.boundary == ChainBoundary::Periodic;
+  ImpulseSeries out;
+  out.profile.assign(T * N, 0.0);
+  out.centre.assign(T, 0.0), out.width2.assign(T, 0.0), out.drift.assign(T, 0.0);
+  out.source_energy.assign(T, 0.0), out.source_ratio.assign(T, 0.0);
+  for (long s = 0; s < T; ++s) out.times.push_back(s * cs.sample_every);
+  Progress progress("chain_impulse (exact) xi=" + std::to_string(cs.spec.xi),
+                    (R + batch - 1) / batch, progress_on);
+  for (int first = 0; first < R; first += batch) {
+    const int n = std::min(batch, R - first);
+    std::vector<std::uint64_t> ids(n);
+    for (int r = 0; r < n; ++r) ids[r] = static_cast<std::uint64_t>(first + r);
+    ChainBatch<Host> c(cs.spec, ids);
+    chain_set_impulse(c, source, v0);
+    const std::vector<double> e0 = chain_totals(c).linear;
+    std::vector<std::unique_ptr<ChainExactSolution>> modes(n);
+    auto u = c.u, v = c.v, b = c.b, klin = c.klin;
+    Kokkos::parallel_for("chain::exact_modes", Kokkos::RangePolicy<Host>(0, n), [&](const int r) {
+      modes[r] = std::make_unique<ChainExactSolution>(
+          std::vector<double>(&b(r, 0), &b(r, 0) + N),
+          std::vector<double>(&klin(r, 0), &klin(r, 0) + c.C), periodic);
+      Eigen::VectorXd v_start = Eigen::VectorXd::Zero(N);
+      v_start(source) = v0;
+      modes[r]->set_initial(Eigen::VectorXd::Zero(N), v_start);
+    });
+    Kokkos::View<double**, Kokkos::LayoutRight, Host::memory_space> te("te", n, N);
+    for (long s = 0; s < T; ++s) {
+      Kokkos::parallel_for("chain::exact_state", Kokkos::RangePolicy<Host>(0, n), [&](const int r) {
+        Eigen::VectorXd us, vs;
+        modes[r]->state(out.times[s], us, vs);
+        for (int i = 0; i < N; ++i) u(r, i) = us(i), v(r, i) = vs(i);
+      });
+      chain_bead_energies(c, te);
+      const auto tot = chain_totals(c);
+      for (int r = 0; r < n; ++r) {
+        for (int i = 0; i < N; ++i) out.profile[s * N + i] += te(r, i);
+        out.source_energy[s] += te(r, source);
+        out.source_ratio[s] += te(r, source) / (0.5 * b(r, source) * v0 * v0);
+        out.centre[s] += tot.centre[r], out.width2[s] += tot.width2[r];
+        out.drift[s] = std::max(out.drift[s], std::abs(tot.linear[r] / e0[r] - 1));
+      }
+    }
+    progress.update((first + n + batch - 1) / batch);
+  }
+  progress.finish();
+  for (auto* series :
+       {&out.profile, &out.source_energy, &out.source_ratio, &out.centre, &out.width2})
+    for (double& x : *series) x /= R;
+  return out;
+}
 
 }  // namespace
 
@@ -53,46 +170,17 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   for (size_t k = 0; k < cs.xis.size(); ++k) {
     cs.spec.xi = cs.xis[k];
     WallClock clock;
-    ChainBatch<Space> c(cs.spec, ChainBatch<Space>::first(cs.realizations));
-    chain_set_impulse(c, source, v0);
-    chain_check_time_step(c, cs.dt);
-    chain_accelerations(c);
-    const auto t0 = chain_totals(c);
-    const auto& e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
+    const ImpulseSeries run_series =
+        cs.exact ? impulse_exact(cs, source, v0, samples, opts.progress)
+                 : impulse_verlet(cs, source, v0, samples, per_sample, opts.progress);
+    const auto& times = run_series.times;
+    const auto& profile = run_series.profile;
+    const auto& centre = run_series.centre;
+    const auto& width2 = run_series.width2;
+    const auto& source_energy = run_series.source_energy;
+    const auto& source_ratio = run_series.source_ratio;
+    const auto& drift = run_series.drift;
     const double energy0 = 0.5 * v0 * v0;  // ensemble-mean initial energy (mean mass 1)
-    Kokkos::View<double**, Kokkos::LayoutRight, Space::memory_space> te("te", c.R, N);
-    std::vector<double> times{0.0}, profile, centre{static_cast<double>(source)}, width2{0.0},
-        source_energy, source_ratio, drift{0.0};
-    // Each realization's source energy against its own initial energy b_source v0^2 / 2.
-    const std::vector<double> source_mass = chain_bead_column<Space>(c.b, source);
-    auto mean_source_ratio = [&] {
-      const std::vector<double> e = chain_bead_column<Space>(te, source);
-      double sum = 0;
-      for (int r = 0; r < c.R; ++r) sum += e[r] / (0.5 * source_mass[r] * v0 * v0);
-      return sum / c.R;
-    };
-    chain_bead_energies(c, te);
-    profile = chain_ensemble_mean<Space>(te);
-    source_energy.push_back(profile[source]);
-    source_ratio.push_back(mean_source_ratio());
-    Progress progress("chain_impulse xi=" + std::to_string(cs.spec.xi), samples, opts.progress);
-    for (long s = 1; s <= samples; ++s) {
-      const auto t = chain_advance_guarded(c, cs.dt, per_sample, e0, cs.energy_growth);
-      chain_bead_energies(c, te);
-      const auto mean = chain_ensemble_mean<Space>(te);
-      profile.insert(profile.end(), mean.begin(), mean.end());
-      source_energy.push_back(mean[source]);
-      source_ratio.push_back(mean_source_ratio());
-      double R = 0, r2 = 0, worst = 0;
-      const auto& conserved = cs.spec.force == ChainForce::Hertz ? t.hertz : t.linear;
-      for (int r = 0; r < c.R; ++r) {
-        R += t.centre[r] / c.R, r2 += t.width2[r] / c.R;
-        worst = std::max(worst, std::abs(conserved[r] / e0[r] - 1));
-      }
-      times.push_back(c.time), centre.push_back(R), width2.push_back(r2), drift.push_back(worst);
-      progress.update(s);
-    }
-    progress.finish();
     const double seconds = clock.seconds();
     // The analysis window ends before the fastest front reaches the far end and reflects.
     const double t_front = (N - 1 - source) / std::sqrt(1.5);
@@ -114,8 +202,13 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
       dist.push_back(d), te_near.push_back(last[source + d] / energy0);
     const int far_end = std::min(
         {power_span, N - 1 - source, static_cast<int>(0.8 * std::sqrt(1.5) * times[s_end])});
-    for (int d = 1; d <= far_end; ++d)
-      dist_far.push_back(d), te_far.push_back(last[source + d] / energy0);
+    // Up to 193 distances spaced evenly in log d from 1 to far_end (each bead once), so that
+    // every decade weighs the same in both fits, as it does on the log-log chart.
+    for (int step = 0, prev = 0; far_end >= 1 && step <= 64 * 3; ++step) {
+      const int d = static_cast<int>(std::lround(std::pow(far_end, step / (64.0 * 3))));
+      if (d > prev) dist_far.push_back(d), te_far.push_back(last[source + d] / energy0);
+      prev = std::max(prev, d);
+    }
     const PowerLawFit near_exp = fit_exponential(dist, te_near);
     const PowerLawFit far_pow = fit_power_law(dist_far, te_far);
     const PowerLawFit far_exp = fit_exponential(dist_far, te_far);
@@ -156,6 +249,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     run["localization_length_beads"] = decay_rate > 0 ? Json(1.0 / decay_rate) : Json();
     Json far = Json::object();
     far["beads"] = std::vector<double>{1.0, static_cast<double>(far_end)};
+    far["points"] = static_cast<double>(dist_far.size());
     far["power_law_exponent"] = -far_pow.exponent;  // <TE_p> ~ d^-alpha
     far["power_law_exponent_stderr"] = far_pow.exponent_stderr;
     far["power_law_rms_log_residual"] = far_pow.rms_log_residual;
@@ -169,7 +263,11 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     run["front_reaches_far_end_at"] = t_front;
     run["max_relative_energy_drift"] = *std::max_element(drift.begin(), drift.end());
     run["wall_seconds"] = seconds;
-    run["bead_steps_per_second"] = double(c.R) * N * samples * per_sample / seconds;
+    run["solver"] = cs.exact ? "exact" : "verlet";
+    if (cs.exact)
+      run["seconds_per_realization"] = seconds / cs.realizations;
+    else
+      run["bead_steps_per_second"] = run_series.bead_steps / seconds;
     runs.push(run);
     const double worst_drift = *std::max_element(drift.begin(), drift.end());
     if (worst_drift > 0.01)

@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <stdexcept>
 #include <iostream>
+#include <stdexcept>
 
 #include "core/master_equation.hpp"
 #include "core/progress.hpp"
@@ -101,6 +101,8 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   const auto w3 = scene.reals("fit.window_global", {0, static_cast<double>(samples)});
   const auto check_bands = scene.reals("validation.bands");
   const long check_samples = scene.integer("validation.samples", 2 * samples);
+  scene.require(!cs.exact, "time.solver",
+                "must be \"verlet\" here (the exact solver serves chain_impulse)");
   const int L = cs.spec.sites();
   scene.require(cs.spec.boundary == ChainBoundary::Fixed || L % 2 == 0, "chain.beads",
                 "must be even for a periodic ring");

@@ -63,7 +63,7 @@ a1.set_title("near the source: exponential fit")
 a1.set_ylim(bottom=1e-12)
 a1.legend(fontsize=7)
 a2.set_xlabel("distance from the source (beads)")
-a2.set_title("long range: power law (solid), exponential (dotted)")
+a2.set_title("long range: power law (—), exponential (···)", fontsize=10)
 a2.set_ylim(bottom=1e-12)
 save(fig, outdir, "near_source_decay.png")
 
