@@ -1,6 +1,7 @@
 """Charts of the elastic_moduli scene: K*, G* against phi Z with EMT and FT predictions
 (one panel row per preparation friction / probing stiffness ratio), Z and chi against phi,
 moduli against probe amplitude (amplitude sweeps), and the moduli scatter against N."""
+import json
 import os
 import sys
 
@@ -28,6 +29,24 @@ def groups(t):
 
 
 series = groups(t)
+
+
+def study_title():
+    """Contact law, N and branch from the run's summary.json (beside results.h5)."""
+    path = os.path.join(os.path.dirname(os.path.abspath(h5)), "summary.json")
+    try:
+        with open(path) as f:
+            par = json.load(f).get("parameters", {})
+    except (OSError, ValueError):
+        return None
+    law = par.get("contact.normal", "linear")
+    counts = par.get("ensemble.counts") or []
+    n = ", ".join(str(v) for v in counts) if counts else par.get("particles.count", "?")
+    branch = par.get("preparation.branch", "unloading")
+    return "%s contacts, N = %s, %s branch" % (law, n, branch)
+
+
+title = study_title()
 # Outputs written before the "jammed" column marked unjammed states by Z = 0.
 jammed = t["jammed"] > 0 if "jammed" in t else t["z_corrected"] > 0
 
@@ -44,6 +63,9 @@ def label_of(key):
     return ", ".join(label) or "simulation"
 
 
+# EMT depends on phi Z (and k_t/k_n) only: one curve through every jammed row of a
+# stiffness ratio. FT differs per configuration: markers, not lines zig-zagging between
+# scattered seeds.
 fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for ax, m in zip(axes, ("K", "G")):
     for n, (key, idx) in enumerate(sorted(series.items())):
@@ -52,31 +74,57 @@ for ax, m in zip(axes, ("K", "G")):
         if len(idx) == 0:
             continue
         x = t["phi"][idx] * t["z_corrected"][idx]
-        o = np.argsort(x)
         c = "C%d" % n
-        ax.plot(x[o], t[m + "_star"][idx][o], "o", color=c, label=label_of(key))
-        ax.plot(x[o], t[m + "_emt"][idx][o], "-", color=c, lw=0.8,
-                label="EMT" if n == 0 else None)
-        ax.plot(x[o], t[m + "_ft2"][idx][o], "-.", color=c, lw=0.8,
-                label="FT, second ring" if n == 0 else None)
-        ax.plot(x[o], t[m + "_ft2_closure"][idx][o], ":", color=c, lw=0.8,
-                label="FT, chi = 1/(phi Z)" if n == 0 else None)
+        ax.plot(x, t[m + "_star"][idx], "o", color=c, label=label_of(key))
+        ax.plot(x, t[m + "_ft2"][idx], "x", color=c, ms=5,
+                label="FT, second ring (measured chi)" if n == 0 else None)
+    ratios = sorted(set(t["kt_kn"][jammed]))
+    for j, r in enumerate(ratios):
+        sel = np.where(jammed & (t["kt_kn"] == r))[0]
+        x = t["phi"][sel] * t["z_corrected"][sel]
+        o = np.argsort(x)
+        tag = " (kt/kn %g)" % r if len(ratios) > 1 else ""
+        ls = ["-", "--", ":", "-."][j % 4]
+        ax.plot(x[o], t[m + "_emt"][sel][o], ls, color="k", lw=0.9, label="EMT" + tag)
+        # The closure's FT also reads phi and Z apart, so it scatters a little about a
+        # curve: markers, like the measured-chi FT.
+        ax.plot(x[o], t[m + "_ft2_closure"][sel][o], "+", color="0.45", ms=5,
+                label="FT, chi = 1/(phi Z)" + tag)
     ax.set_xlabel("phi Z")
     ax.set_ylabel(m + "* = " + m + " dbar / k_n")
     ax.legend(fontsize=7)
+if title:
+    fig.suptitle(title, fontsize=10)
 save(fig, outdir, "moduli_vs_phiZ.png")
 
-fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+# Unjammed states carry no contact network: open markers at Z = 0, never joined by lines.
+fig, axes = plt.subplots(1, 3, figsize=(14, 4))
 for n, (key, idx) in enumerate(sorted(series.items())):
     idx = np.array(idx)
     o = idx[np.argsort(t["phi"][idx])]
-    axes[0].plot(t["phi"][o], t["z_corrected"][o], "o-", color="C%d" % n, label=label_of(key))
-    axes[1].plot(t["phi"][o], t["chi"][o], "s-", color="C%d" % n, label=label_of(key))
+    jam, loose = o[jammed[o]], o[~jammed[o]]
+    c = "C%d" % n
+    axes[0].plot(t["phi"][jam], t["z_corrected"][jam], "o-", color=c, label=label_of(key))
+    axes[1].plot(t["phi"][jam], t["chi"][jam], "s-", color=c, label=label_of(key))
+    if len(loose):
+        axes[0].plot(t["phi"][loose], np.zeros(len(loose)), "o", mfc="none", color=c,
+                     label="unjammed" if n == 0 else None)
+    x = t["phi"][jam] * t["z_corrected"][jam]
+    axes[2].plot(x, t["chi"][jam], "s", color=c, label=label_of(key))
+xs = t["phi"][jammed] * t["z_corrected"][jammed]
+if len(xs):
+    grid = np.linspace(xs.min(), xs.max(), 100)
+    axes[2].plot(grid, 1 / grid, "k:", lw=0.9, label="closure chi = 1/(phi Z)")
 axes[0].set_ylabel("Z (non-rattlers)")
 axes[1].set_ylabel("chi = <(Z - Zbar)^2> / Zbar^2")
-for ax in axes:
+axes[2].set_ylabel("chi")
+axes[2].set_xlabel("phi Z")
+for ax in axes[:2]:
     ax.set_xlabel("phi")
+for ax in axes:
     ax.legend(fontsize=7)
+if title:
+    fig.suptitle(title, fontsize=10)
 save(fig, outdir, "coordination_vs_phi.png")
 
 # The per-configuration table as markdown, for reading without HDF5 tools.
