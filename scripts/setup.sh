@@ -9,6 +9,9 @@
 #   GRANULAR_JOBS    parallel build jobs      (default: number of cores)
 #   GRANULAR_CUDA_CHECK=1  also build the engine with the CUDA backend (compile and link
 #                    only) in $GRANULAR_CUDA_BUILD (default <repo>/build-cuda) when nvcc exists
+#   GRANULAR_VIEWERS=1  also install Chromium and ParaView (about 1 GB), so that the tests
+#                    that open report.html and the XDMF time series in them run instead of
+#                    skipping
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -29,6 +32,9 @@ as_root() {
 packages=(build-essential g++ cmake make pkg-config ca-certificates gnupg
   libeigen3-dev libhdf5-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy)
+if [ "${GRANULAR_VIEWERS:-0}" = 1 ]; then
+  packages+=(chromium paraview python3-paraview)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
