@@ -110,6 +110,15 @@ std::string parameter_fingerprint(const std::string& text) {
 }
 }  // namespace
 
+std::string open_study_checkpoints(const std::string& out_dir, bool resume) {
+  const std::string parts = out_dir + "/variants";
+  if (!resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
+    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
+                     "--resume, or remove that directory (or choose another --out) to start over");
+  make_directories(parts);
+  return parts;
+}
+
 std::string moduli_parameters_fingerprint(const std::map<std::string, std::string>& used) {
   // How far a run goes, and the overlap guard (it changes whether a run may go on, never its
   // trajectory), are not parameters of its results: resuming may change them. Keys added

@@ -55,6 +55,11 @@ std::vector<SizeScatter> size_scatter(const std::map<std::string, std::vector<do
 // decide its results, so a checkpoint is only taken up by a run of the same scene.
 std::string moduli_parameters_fingerprint(const std::map<std::string, std::string>& used);
 
+// The checkpoint folder <out_dir>/variants of a study, created. Never drops hours of
+// preparation silently: a fresh run (not `resume`) into an output folder whose variants/
+// holds checkpoints of an unfinished study is refused, saying how to continue or restart.
+std::string open_study_checkpoints(const std::string& out_dir, bool resume);
+
 // <dir>/<name>.h5 holds the datasets, <dir>/<name>.index (written last) lists them with the
 // fingerprint: a variant counts as finished only when its index exists.
 void save_moduli_part(const std::string& dir, const std::string& name,

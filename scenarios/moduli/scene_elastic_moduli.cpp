@@ -51,14 +51,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
   Outputs out;
   // Finished preparation variants are checkpointed here; a fresh run starts without them.
-  const std::string parts = opts.out_dir + "/variants";
+  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
   const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
-  // Never drop hours of preparation silently: a fresh run into a directory that holds
-  // checkpoints of an unfinished study is refused.
-  if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
-    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
-                     "--resume, or remove that directory (or choose another --out) to start over");
-  make_directories(parts);
 
   bool stopped = false;
   with_contact_model(s.contact, [&](const auto& model) {

@@ -359,12 +359,8 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   if (!begin_outputs(opts)) return;
   // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
   // when every variant is done, so an interrupted run leaves nothing that looks finished.
-  const std::string parts = opts.out_dir + "/variants";
+  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
   const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
-  if (!opts.resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
-    throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
-                     "--resume, or remove that directory (or choose another --out) to start over");
-  make_directories(parts);
   for (const char* f : {"/summary.json", "/results.h5"})
     std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
 
