@@ -108,8 +108,11 @@ TEST(MasterEquation, GlobalFitRecoversQWithZeroColumnSumsAndNonNegativeGains) {
     EXPECT_LT(err, 2e-3 * (dt / 0.2) * (dt / 0.2)) << "dt = " << dt;
     for (int s = 0; s < 4; ++s) {
       EXPECT_NEAR(fit.Q.col(s).sum(), 0.0, 1e-15);
-      for (int r = 0; r < 4; ++r)
-        if (r != s) EXPECT_GE(fit.Q(r, s), 0.0);
+      for (int r = 0; r < 4; ++r) {
+        if (r != s) {
+          EXPECT_GE(fit.Q(r, s), 0.0);
+        }
+      }
     }
     EXPECT_EQ(fit.trapped.cwiseAbs().maxCoeff(), 0.0);
   }
