@@ -3,6 +3,7 @@
 // hook through which multi-contact laws act (kernels/multicontact.hpp; none by default).
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <type_traits>
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
@@ -221,11 +222,139 @@ void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSp
       });
 }
 
+// One pass, for host backends: the owner of each contact evaluates it, adds the force to
+// itself and scatters the reaction to its partner at once, as a serial code with a half
+// list would. No per-contact force array, no second sweep over the list. Writes to the
+// partner cannot race because threads work on slabs of the neighbour list
+// (NeighborList::slab_begin) three slabs apart: a contact joins particles of the same or
+// adjacent slabs, so concurrent slabs never touch the same particle. Each slab is swept by
+// one thread in cell order, so every particle's sum has a fixed order whatever the thread
+// count. (A device has too few slabs to fill it; it keeps the two passes above.)
+// Raw-pointer views of the particle fields for the host kernel: the same accessors as
+// ParticleViews, without the View's run-time strides and the reloads of its metadata that
+// the compiler cannot rule out around the scattered stores.
+struct HostVec3 {
+  double* p;
+  KOKKOS_FORCEINLINE_FUNCTION double& operator()(int i, int d) const { return p[3 * i + d]; }
+};
+template <class T>
+struct HostArray {
+  T* p;
+  KOKKOS_FORCEINLINE_FUNCTION T& operator()(int i) const { return p[i]; }
+};
+struct HostParticleViews {
+  HostVec3 x, v, w;
+  HostArray<double> radius, mass;
+  HostArray<int> species;
+  template <class ExecSpace>
+  explicit HostParticleViews(const Particles<ExecSpace>& p)
+      : x{p.x.data()},
+        v{p.v.data()},
+        w{p.w.data()},
+        radius{p.radius.data()},
+        mass{p.mass.data()},
+        species{p.species.data()} {}
+};
+
+template <class ExecSpace, class Model, class HistoryView>
+void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                             const HistoryView& history, const PeriodicBox& box,
+                             const Model& model, const Damping& damping,
+                             const double strain_rate[3], double dt) {
+  const ParticleViews<ExecSpace> pv(p);
+  const HostParticleViews hv(p);
+  auto f = p.f, torque = p.torque;
+  const HostVec3 fh{p.f.data()}, qh{p.torque.data()};
+  const HostArray<const int> offsets{nl.offsets().data()}, neighbors{nl.neighbors().data()};
+  const HostArray<const int> owned_end{nl.owned_end().data()};
+  const HostArray<const int> order{nl.cell_order().data()}, slab_begin{nl.slab_begin().data()};
+  double* const hist = history.data();
+  const PeriodicBox b = box;
+  const Model m = model;
+  const double gb = damping.translational, gr = damping.rotational;
+  const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
+  Kokkos::parallel_for(
+      "dem::compute_forces::damping", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
+        constexpr bool rot = Model::rotations;
+        for (int d = 0; d < 3; ++d) f(i, d) = -gb * pv.v(i, d);
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
+      });
+  const int slabs = nl.num_slabs();
+  const int rounds = slabs >= 3 ? 3 : 1;
+  for (int r = 0; r < rounds; ++r) {
+    const int tasks = (slabs - r + rounds - 1) / rounds;
+    Kokkos::parallel_for(
+        "dem::compute_forces::slabs",
+        Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>(0, tasks),
+        KOKKOS_LAMBDA(const int t) {
+          constexpr int H = Model::history;
+          constexpr bool rot = Model::rotations;
+          const int slab = t * rounds + r;
+          const double r3[3] = {rate[0], rate[1], rate[2]};
+          for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q) {
+            const int i = order(q);
+            const Body bi = load_body(hv, i, rot);
+            double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
+            const int kend = owned_end(i);
+            for (int k = offsets(i); k < kend; ++k) {
+              const int j = neighbors(k);
+              double rx, ry, rz, r2;
+              if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
+                if constexpr (H > 0) {  // apart: the history is forgotten (mostly zero already)
+                  bool stale = false;
+                  for (int c = 0; c < H; ++c) stale = stale || hist[k * H + c] != 0.0;
+                  if (stale)
+                    for (int c = 0; c < H; ++c) hist[k * H + c] = 0.0;
+                }
+                continue;
+              }
+              PairState s;
+              pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
+              double h[H > 0 ? H : 1];
+              if constexpr (H > 0)
+                for (int c = 0; c < H; ++c) h[c] = hist[k * H + c];
+              PairForce out;
+              m.evaluate(s, dt, h, out);
+              if constexpr (H > 0)
+                for (int c = 0; c < H; ++c) hist[k * H + c] = h[c];
+              for (int d = 0; d < 3; ++d) {
+                fi[d] += out.f[d];
+                fh(j, d) -= out.f[d];
+              }
+              if constexpr (rot)
+                for (int d = 0; d < 3; ++d) {
+                  qi[d] += out.q[d];
+                  qh(j, d) += out.qj[d];
+                }
+            }
+            for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
+            if constexpr (rot)
+              for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
+          }
+        });
+  }
+}
+
+// Which force pass a backend uses: one pass by slabs where threads are few and share
+// memory, the two passes on a device.
+template <class ExecSpace>
+constexpr bool forces_by_slabs() {
+  return std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>;
+}
+
 template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
-                    double dt) {
+                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>()) {
+  if (!two_pass) {
+    if constexpr (forces_by_slabs<ExecSpace>()) {
+      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt);
+      return;
+    }
+  }
   compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt);
   gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
 }

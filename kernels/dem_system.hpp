@@ -37,6 +37,8 @@ struct DemParams {
   long rebuild_every = 0;         // > 0: rebuild the neighbour list every this many steps, whatever
                                   // the skin criterion says (tests, benchmarks of flowing systems)
   double gravity[3] = {0, 0, 0};  // body force per unit mass
+  bool two_pass_forces = false;   // host backends: the device's two-pass force kernel instead of
+                                  // the one-pass slab kernel (tests compare the two)
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -82,16 +84,18 @@ class DemSystem {
     const double dt = params_.dt;
     const bool straining = rate_[0] != 0.0 || rate_[1] != 0.0 || rate_[2] != 0.0;
     if (profile_) return step_profiled(n);
+    // The closing half kick of each step is deferred into the next step's first pass (same
+    // arithmetic, one sweep less); the last one is applied before returning.
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt);
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) rebuild();
       walls_.update(time_ + dt);
       forces(dt);
-      kick<kRot>(p_, dt);
       time_ += dt;
       ++steps_;
     }
+    if (n > 0) kick<kRot>(p_, dt);
   }
 
   // Same step, timed per phase (for benchmarks). Pass nullptr to switch off.
@@ -139,6 +143,8 @@ class DemSystem {
       used[species(i)] = true;
     }
     mc.validate(used);
+    // Multi-contact laws act between the two passes, which need the per-contact forces.
+    size_pair_buffer(mc.mode != MultiContact::None);
     mc_.configure(mc, p_, nl_, walls_.size(), pair_.extent(0));
     initial_forces();
   }
@@ -171,9 +177,7 @@ class DemSystem {
     }
     nl_.build(p_, box_);
     history_.remap(p_, nl_, order);
-    constexpr int nb = Model::rotations ? 9 : 3;
-    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
-      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+    size_pair_buffer(mc_.active());
     mc_.after_build(p_, nl_, order, pair_.extent(0));
   }
 
@@ -302,13 +306,26 @@ class DemSystem {
       box_.periodic[d] = s[5 + 4 * d] != 0.0, rate_[d] = s[6 + 4 * d];
     }
     walls_.update(time_);
-    constexpr int nb = Model::rotations ? 9 : 3;
-    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
-      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+    size_pair_buffer(mc_.active());
   }
 
  private:
   static constexpr bool kRot = Model::rotations;
+
+  // The per-contact force array of the two-pass kernel: allocated only where that kernel
+  // runs (devices, multi-contact laws, or on request), since it is ~40 % of the memory.
+  bool two_pass() const {
+    return params_.two_pass_forces || mc_.active() || !forces_by_slabs<ExecSpace>();
+  }
+  void size_pair_buffer(bool multicontact) {
+    if (!two_pass() && !multicontact) {
+      pair_ = pair_view();
+      return;
+    }
+    constexpr int nb = Model::rotations ? 9 : 3;
+    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
+      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+  }
 
   bool rebuild_due(double max_sq) const {
     if (params_.rebuild_every > 0)
@@ -321,7 +338,8 @@ class DemSystem {
                   wall_history_, wall_record_, params_.gravity, external_);
       return;
     }
-    compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt);
+    compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
+                   two_pass());
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);

@@ -10,9 +10,13 @@
 namespace granular {
 
 // Rotations are integrated only when the contact model produces torques.
+// `pending`: the closing half kick of the previous step was deferred to this pass (one sweep
+// over the particles instead of two); it is applied first, with the same roundings as a
+// separate kick, so the trajectory is bitwise the same.
 template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
-                  const typename Particles<ExecSpace>::vec_view& x_ref, double dt) {
+                  const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
+                  bool pending = false) {
   auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
   auto mass = p.mass, inertia = p.inertia;
   const PeriodicBox b = box;
@@ -23,7 +27,8 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
         const double h = 0.5 * dt / mass(i);
         double d2 = 0.0;
         for (int d = 0; d < 3; ++d) {
-          const double vd = v(i, d) + h * f(i, d);
+          const double v0 = pending ? v(i, d) + h * f(i, d) : v(i, d);
+          const double vd = v0 + h * f(i, d);
           v(i, d) = vd;
           const double xd = b.wrap(x(i, d) + dt * vd, d);
           x(i, d) = xd;
@@ -32,7 +37,10 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
         }
         if (Rotations) {
           const double hr = 0.5 * dt / inertia(i);
-          for (int d = 0; d < 3; ++d) w(i, d) += hr * q(i, d);
+          for (int d = 0; d < 3; ++d) {
+            const double w0 = pending ? w(i, d) + hr * q(i, d) : w(i, d);
+            w(i, d) = w0 + hr * q(i, d);
+          }
         }
         m = d2 > m ? d2 : m;
       },

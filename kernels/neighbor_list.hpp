@@ -98,6 +98,13 @@ class NeighborList {
   // Particles in cell order (cells in z, y, x lexicographic order; identity order inside a
   // cell): particles of a cell and of its x-neighbours sit close in memory.
   const int_view& cell_order() const { return cell_particles_; }
+  // Slabs for the one-pass force kernel of host backends: slab s holds the particles
+  // cell_order()(slab_begin()(s)) .. cell_order()(slab_begin()(s + 1) - 1), whole layers of
+  // cells along z. A slab is at least one cell (one cutoff) thick, so every pair of the list
+  // joins particles of the same or adjacent slabs (cyclically on a periodic axis). The slab
+  // count is a multiple of 3 (or 1), so slabs 3 apart never share a particle's neighbours.
+  const int_view& slab_begin() const { return slab_begin_; }  // num_slabs() + 1
+  int num_slabs() const { return num_slabs_; }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.
   void build(const Particles<ExecSpace>& p, const PeriodicBox& box);
@@ -124,6 +131,9 @@ class NeighborList {
     save_view(out, g + "/mirror", mirror_);
     save_view(out, g + "/owned_end", owned_end_);
     save_view(out, g + "/x_ref", x_ref_);
+    // The slabs fix the summation order of the one-pass force kernel.
+    save_view(out, g + "/cell_order", cell_particles_);
+    save_view(out, g + "/slab_begin", slab_begin_);
     out.write(g + "/scalars",
               std::vector<double>{static_cast<double>(num_entries_), static_cast<double>(builds_),
                                   a_max_, built_len_[0], built_len_[1], built_len_[2]});
@@ -134,6 +144,13 @@ class NeighborList {
     load_view(in, g + "/mirror", mirror_);
     load_view(in, g + "/owned_end", owned_end_);
     load_view(in, g + "/x_ref", x_ref_);
+    if (!in.has(g + "/cell_order") || !in.has(g + "/slab_begin"))
+      throw InputError("restart group " + g +
+                       " has no slab order (written by an older version): it cannot be"
+                       " continued exactly; start the run again");
+    load_view(in, g + "/cell_order", cell_particles_);
+    load_view(in, g + "/slab_begin", slab_begin_);
+    num_slabs_ = static_cast<int>(slab_begin_.extent(0)) - 1;
     const auto s = in.reals(g + "/scalars");
     if (s.size() != 6) throw InputError("restart group " + g + " has a malformed list");
     num_entries_ = static_cast<int>(s[0]), builds_ = static_cast<long>(s[1]), a_max_ = s[2];
@@ -148,6 +165,11 @@ class NeighborList {
   double built_len_[3] = {1, 1, 1};
   int_view offsets_, neighbors_, mirror_, owned_end_;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
+  int_view slab_begin_;
+  int num_slabs_ = 0;
+  static constexpr int kMaxScratch = 64;
+  int scratch_cap_ = 24;
+  int_view scratch_;
   int nc_[3] = {1, 1, 1};
   typename Particles<ExecSpace>::vec_view x_ref_;
 };
@@ -250,6 +272,26 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
       });
 
   for (int d = 0; d < 3; ++d) nc_[d] = nc[d];
+
+  // Slabs of whole cell layers along z (see slab_begin()). On a periodic axis the first and
+  // last slabs are neighbours, so the count must be a multiple of 3 for the three rounds.
+  const int layers = ncz;
+  int slabs = b.periodic[2] ? (layers / 3) * 3 : layers;
+  // An even number of slabs per round splits evenly between 2, 4, ... threads; thicker
+  // slabs are as valid, and the partition still depends on the box alone.
+  if (slabs >= 12 && (slabs / 3) % 2 == 1) slabs -= b.periodic[2] ? 3 : 1;
+  if (slabs < 3) slabs = 1;
+  if (static_cast<int>(slab_begin_.extent(0)) != slabs + 1)
+    slab_begin_ = int_view("neighbor::slab_begin", slabs + 1);
+  num_slabs_ = slabs;
+  auto slab_begin = slab_begin_;
+  const int cells_per_layer = ncx * ncy;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::slabs", Kokkos::RangePolicy<ExecSpace>(0, slabs + 1),
+      KOKKOS_LAMBDA(const int s) {
+        const int layer = static_cast<int>(static_cast<long>(s) * layers / slabs);
+        slab_begin(s) = cell_start(layer * cells_per_layer);
+      });
 }
 
 template <class ExecSpace>
@@ -263,23 +305,35 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles,
                                      b, skin_,  nc_[0],  nc_[1],     nc_[2]};
 
-  // count -> scan -> fill: exact capacity, no overflow to detect. The count pass also
-  // counts the owned partners (higher identity), so the fill writes both groups at once.
+  // One stencil sweep counts each particle's partners (and the owned ones, of higher
+  // identity) and keeps the first `cap` of them in a scratch row; a scan gives the offsets,
+  // and the rows are copied owned first. Only if some particle has more than `cap`
+  // partners is the stencil swept a second time to fill the list directly. `cap` follows
+  // the largest count (up to kMaxScratch), so the second sweep is rare.
   auto offsets = offsets_;
   auto owned_end = owned_end_;
   auto id = p.id;
-  Kokkos::parallel_for(
+  const int cap = scratch_cap_;
+  if (scratch_.extent(0) < static_cast<size_t>(n) * cap)
+    scratch_ = int_view("neighbor::scratch", static_cast<size_t>(n) * cap);
+  auto scratch = scratch_;
+  int most = 0;
+  Kokkos::parallel_reduce(
       "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
-      KOKKOS_LAMBDA(const int i) {
+      KOKKOS_LAMBDA(const int i, int& mx) {
         const int id_i = id(i);
         int count = 0, owned = 0;
+        const size_t row = static_cast<size_t>(i) * cap;
         visit(i, [&](int j) {
+          if (count < cap) scratch(row + count) = j;
           ++count;
           owned += id(j) > id_i ? 1 : 0;
         });
         offsets(i) = count;
         owned_end(i) = owned;
-      });
+        mx = count > mx ? count : mx;
+      },
+      Kokkos::Max<int>(most));
   int total = 0;
   Kokkos::parallel_scan(
       "neighbor::NeighborList::scan", Kokkos::RangePolicy<ExecSpace>(0, n + 1),
@@ -296,19 +350,41 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   }
   auto neighbors = neighbors_;
   auto mirror = mirror_;
-  Kokkos::parallel_for(
-      "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
-      KOKKOS_LAMBDA(const int i) {
-        const int id_i = id(i);
-        int ko = offsets(i), kp = offsets(i) + owned_end(i);
-        owned_end(i) = kp;
-        visit(i, [&](int j) {
-          if (id(j) > id_i)
-            neighbors(ko++) = j;
-          else
-            neighbors(kp++) = j;
+  if (most <= cap) {
+    Kokkos::parallel_for(
+        "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
+        KOKKOS_LAMBDA(const int i) {
+          const int id_i = id(i);
+          int ko = offsets(i), kp = offsets(i) + owned_end(i);
+          owned_end(i) = kp;
+          const size_t row = static_cast<size_t>(i) * cap;
+          const int count = offsets(i + 1) - offsets(i);
+          for (int c = 0; c < count; ++c) {
+            const int j = scratch(row + c);
+            if (id(j) > id_i)
+              neighbors(ko++) = j;
+            else
+              neighbors(kp++) = j;
+          }
         });
-      });
+  } else {
+    Kokkos::parallel_for(
+        "neighbor::NeighborList::fill_sweep", Kokkos::RangePolicy<ExecSpace>(0, n),
+        KOKKOS_LAMBDA(const int i) {
+          const int id_i = id(i);
+          int ko = offsets(i), kp = offsets(i) + owned_end(i);
+          owned_end(i) = kp;
+          visit(i, [&](int j) {
+            if (id(j) > id_i)
+              neighbors(ko++) = j;
+            else
+              neighbors(kp++) = j;
+          });
+        });
+  }
+  // Room for a little growth; a list with a few crowded particles (large ones among small)
+  // keeps the bounded scratch and sweeps twice rather than hold n x (largest count).
+  scratch_cap_ = most + most / 4 + 2 <= kMaxScratch ? std::max(cap, most + most / 4 + 2) : cap;
   Kokkos::parallel_for(
       "neighbor::NeighborList::mirror", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <set>
 #include <vector>
 
@@ -169,6 +171,41 @@ TYPED_TEST(NeighborListTest, SkinCriterionNeverMissesATouchingPair) {
   }
   EXPECT_GT(checked, 10);
   EXPECT_GT(nl.builds(), 1);  // the criterion did fire during the compression
+}
+
+// A particle with far more partners than the one-sweep build keeps per row (a large sphere
+// among small ones) sends the build down its second sweep; the list must still be exact,
+// then and at the next build, when the per-row capacity has grown as far as it may.
+TYPED_TEST(NeighborListTest, CrowdedParticleBeyondTheRowCapacityIsListedExactly) {
+  using Exec = TypeParam;
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = 30.0;
+  std::vector<std::array<double, 4>> balls = {{15.0, 15.0, 15.0, 5.0}};  // the crowded one
+  for (int a = 0; a < 30; ++a)
+    for (int b = 0; b < 30; ++b)
+      for (int c = 0; c < 30; c += 2) {
+        const double x = a + 0.5, y = b + 0.5, z = c + 0.5 + 0.5 * (a % 2);
+        const double d2 = std::pow(x - 15, 2) + std::pow(y - 15, 2) + std::pow(z - 15, 2);
+        if (d2 < 5.6 * 5.6) continue;  // keep the big one free of overlaps
+        balls.push_back({x, y, z, 0.45});
+      }
+  HostParticles h;
+  h.resize(static_cast<int>(balls.size()));
+  for (size_t i = 0; i < balls.size(); ++i) {
+    h.x[i] = balls[i][0], h.y[i] = balls[i][1], h.z[i] = balls[i][2];
+    h.radius[i] = balls[i][3], h.density[i] = 1.0;
+  }
+  auto p = Particles<Exec>::from_host(h);
+  const double skin = 0.8;
+  NeighborList<Exec> nl(skin);
+  for (int build = 0; build < 2; ++build) {
+    nl.build(p, box);
+    const auto ref = brute_force(p, box, skin);
+    ASSERT_GT(ref[0].size(), 100u) << "the big particle must exceed any row capacity";
+    EXPECT_EQ(listed(nl, p.n), ref);
+    check_owned_first_and_mirror(nl, p);
+    displace(p, box, 0.02, 40 + build);
+  }
 }
 
 #include "kernels/strain_modes.hpp"

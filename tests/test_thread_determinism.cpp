@@ -31,6 +31,7 @@ namespace {
 struct Trace {
   std::vector<double> x, v, w, diag;
   int concurrency = 0;  // threads of the space the run used
+  int slabs = 0;        // slabs of the host force kernel at the end (rounds of 3 in parallel)
 };
 
 template <class Exec, class Model>
@@ -71,6 +72,7 @@ Trace run_short_compression(const Model& model, int count, long steps) {
     record();
   }
   EXPECT_GT(sys.neighbor_list().builds(), 2);  // rebuilds happened inside the compared window
+  t.slabs = sys.neighbor_list().num_slabs();
   auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().x);
   auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().v);
   auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().w);
@@ -108,10 +110,13 @@ void expect_identical(const Trace& a, const Trace& b, const char* what) {
   EXPECT_TRUE(bitwise_equal(a.diag, b.diag)) << what << ": diagnostics differ";
 }
 
+// `slabs` (if given): the number of slabs of the host force kernel at the end of the run.
 template <class Model>
-void expect_thread_count_independent(const Model& model, int count = 400, long steps = 2500) {
+void expect_thread_count_independent(const Model& model, int count = 400, long steps = 2500,
+                                     int* slabs = nullptr) {
   using Host = Kokkos::DefaultHostExecutionSpace;
   const Trace parallel = run_short_compression<Host>(model, count, steps);
+  if (slabs) *slabs = parallel.slabs;
   if (Model::rotations) {
     double spin = 0;
     for (double w : parallel.w) spin = std::max(spin, std::fabs(w));
@@ -170,4 +175,15 @@ TEST(ThreadDeterminism, HertzMindlinHistoryIsThreadCountIndependent) {
             CoulombTangential::uniform(2 * Gp / (2 - nu), 20, 0.5, 0.5,
                                        CoulombTangential::MindlinPairDiameter),
             {}});
+}
+
+// Enough particles for several slabs per round of the host force kernel, so that threads
+// really share a round and scatter reactions into each other's neighbour slabs.
+TEST(ThreadDeterminism, FrictionalPackingOverManySlabsIsThreadCountIndependent) {
+  using Model = ContactModel<LinearNormal, CoulombTangential>;
+  int slabs = 0;
+  expect_thread_count_independent(
+      Model{LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.4), {}},
+      3000, 1500, &slabs);
+  EXPECT_GE(slabs, 6);
 }

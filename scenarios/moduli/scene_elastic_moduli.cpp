@@ -151,6 +151,11 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   for (const auto& [k, v] : out.sweep_data) h5.write(k, v);
   h5.commit();
   summary["configurations"] = out.configs;
+  // The configurations are large restartable files the run regenerates; a summary kept as a
+  // reference output travels without them, and says so.
+  summary["configurations_note"] =
+      "relaxed configurations written by this run under its output directory (configs/); "
+      "they are not part of committed reference outputs: the same command regenerates them";
   summary["table"] = out.rows;
   if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
   if (s.halving) {
