@@ -196,10 +196,35 @@ int main(int argc, char** argv) {
                       << " M particle-steps/s\n";
           }
           // Bytes a particle-step touches, counted from the data the kernels read and write
-          // (each access once; neighbour data that hits cache still counts).
-          const double nb = entries / n, contacts = z_end;
-          const double force_bytes = 24 + 24 + 8 + 8 + 24 + nb * (4 + 24 + 8) + contacts * 24;
-          const double integrate_bytes = (48 + 48 + 24 + 8 + 24) + (48 + 24 + 8);
+          // (each access once; neighbour data that hits cache still counts). Per particle:
+          // nb full-list entries, nb/2 of them owned, z_end/2 owned contacts.
+          constexpr double H = Model::history, R = Model::rotations ? 1.0 : 0.0;
+          const double nb = entries / n, owned = nb / 2, contacts = z_end / 2;
+          const double body_i = 24 + 24 + 24 * R + 8 + 8 + 4;  // x, v, w, radius, mass, species
+          const double body_j_rest = 24 + 24 * R + 8 + 4;     // v, w, mass, species of a partner
+          double force_bytes = 0;
+          if (forces_by_slabs<Exec>()) {
+            // Damping pass: v, w read, f, torque written. Slab pass: i's state, its list row
+            // (offsets, owned end, cell order), per owned entry the partner's x and radius
+            // and the history (read for the stale check), per contact the partner's other
+            // fields, the history written and the partner's f and torque read and written;
+            // then i's f and torque read and written.
+            force_bytes = (24 + 24 * R) * 2 + body_i + 12 + owned * (4 + 24 + 8 + 8 * H) +
+                          contacts * (body_j_rest + 8 * H + 48 * (1 + R)) + 48 * (1 + R);
+          } else {
+            // Pair pass: per owned entry the partner's x and radius, the history and the
+            // per-contact force row (3 or 9 doubles) written, zeros included; per contact the
+            // partner's other fields and the history written. Gather pass: per entry the
+            // mirror index and the force row read, then f and torque written.
+            const double row = 8 * (3 + 6 * R);
+            force_bytes = body_i + 8 + owned * (4 + 24 + 8 + 8 * H + row) +
+                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 8 +
+                          nb * (4 + row) + 24 * (1 + R);
+          }
+          // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
+          // written): the closing kick of each step is deferred into the next one.
+          const double integrate_bytes = (24 + 24 + 24 + 24 * R + 24 * R + 8 + 8 * R + 24) +
+                                         (24 + 24 + 24 * R);
           const double bytes = force_bytes + integrate_bytes;
           const double med = median(rates);
           const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
