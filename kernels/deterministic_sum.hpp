@@ -9,11 +9,14 @@
 
 namespace granular {
 
-// Sums columns of a (n x NC) View. The block size is a constant, not a function of the
-// number of threads, which is what makes the result reproducible.
+// The block size is a constant, not a function of the number of threads, which is what
+// makes the results reproducible.
+constexpr int kDeterministicBlock = 256;
+
+// Sums columns of a (n x NC) View.
 template <int NC, class ExecSpace, class View2D>
 std::array<double, NC> deterministic_column_sums(const View2D& values, int n) {
-  constexpr int block = 256;
+  constexpr int block = kDeterministicBlock;
   const int nblocks = (n + block - 1) / block;
   using mem = typename ExecSpace::memory_space;
   Kokkos::View<double**, Kokkos::LayoutRight, mem> partial("reduce::partial", nblocks, NC);

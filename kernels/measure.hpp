@@ -34,83 +34,136 @@ struct Measurements {
   double volume = 0;
 };
 
+// The measured values of one particle: a row of kMeasureColumns numbers. Columns: ekin,
+// epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers, normal-force stress
+// (6), tangential-force stress (6), rotational kinetic energy, squared contacts of
+// non-rattlers, contact-number histogram (7), fabric (6).
+constexpr int kMeasureColumns = 38;
+
+template <class ExecSpace, class Model, class HistoryView>
+struct ParticleMeasure {
+  ParticleViews<ExecSpace> pv;
+  typename Particles<ExecSpace>::vec_view v, w;
+  typename Particles<ExecSpace>::scalar_view mass, inertia;
+  typename NeighborList<ExecSpace>::int_view offsets, neighbors, mirror, owned_end;
+  HistoryView history;
+  PeriodicBox b;
+  Model m;
+  int thr;
+
+  // Fills row[0 .. kMeasureColumns) for particle i; returns its largest overlap ratio.
+  KOKKOS_INLINE_FUNCTION double operator()(const int i, double* row) const {
+    constexpr int H = Model::history;
+    double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0}, fab[6] = {0, 0, 0, 0, 0, 0};
+    double epot = 0.0, mo = 0.0;
+    int c = 0;
+    const double zero[3] = {0, 0, 0};
+    for (int k = offsets(i); k < offsets(i + 1); ++k) {
+      // Evaluated from the owner's side (lower identity), where the history lives;
+      // stress and energy of a pair are the same seen from either side.
+      const int j = neighbors(k);
+      const bool own = k < owned_end(i);  // owned entries come first in each row
+      const int a = own ? i : j, c2 = own ? j : i, slot = own ? k : mirror(k);
+      PairState s;
+      if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
+      double h[H > 0 ? H : 1];
+      if constexpr (H > 0)
+        for (int q = 0; q < H; ++q) h[q] = history(slot, q);
+      PairForce e;
+      m.elastic(s, h, e);
+      // sigma = (1/V) sum_c l (x) f with branch vector l = r n; each pair is seen twice.
+      const double r = s.ai + s.aj - s.delta;
+      const double l[3] = {0.5 * r * s.n[0], 0.5 * r * s.n[1], 0.5 * r * s.n[2]};
+      const double fnv[3] = {e.fn * s.n[0], e.fn * s.n[1], e.fn * s.n[2]};
+      const int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
+      for (int q = 0; q < 6; ++q) {
+        sn[q] += l[ia[q]] * fnv[ib[q]];
+        st[q] += l[ia[q]] * e.ft[ib[q]];
+        fab[q] += s.n[ia[q]] * s.n[ib[q]];
+      }
+      epot += 0.5 * m.energy(s, h);
+      ++c;
+      const double amin = s.ai < s.aj ? s.ai : s.aj;
+      mo = s.delta / amin > mo ? s.delta / amin : mo;
+    }
+    const double v2 = v(i, 0) * v(i, 0) + v(i, 1) * v(i, 1) + v(i, 2) * v(i, 2);
+    const double w2 = w(i, 0) * w(i, 0) + w(i, 1) * w(i, 1) + w(i, 2) * w(i, 2);
+    row[0] = 0.5 * mass(i) * v2 + 0.5 * inertia(i) * w2;
+    row[23] = 0.5 * inertia(i) * w2;
+    row[24] = c >= thr ? static_cast<double>(c) * c : 0.0;
+    for (int q = 0; q < 7; ++q) row[25 + q] = (c < 6 ? c == q : q == 6) ? 1.0 : 0.0;
+    const double ai = pv.radius(i);
+    const double vp = 4.0 / 3.0 * M_PI * ai * ai * ai;
+    for (int q = 0; q < 6; ++q) row[32 + q] = vp * fab[q];
+    row[1] = epot;
+    for (int q = 0; q < 6; ++q) {
+      row[2 + q] = sn[q] + st[q];
+      row[11 + q] = sn[q];
+      row[17 + q] = st[q];
+    }
+    row[8] = c;
+    row[9] = c >= thr ? 1.0 : 0.0;
+    row[10] = c >= thr ? c : 0.0;
+    return mo;
+  }
+};
+
 template <class ExecSpace, class Model, class HistoryView>
 Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                      const HistoryView& history, const PeriodicBox& box, const Model& model,
                      int rattler_threshold, double particle_volume) {
-  // Columns: ekin, epot, stress (6), contacts, non-rattler flag, contacts of non-rattlers,
-  // normal-force stress (6), tangential-force stress (6), rotational kinetic energy,
-  // squared contacts of non-rattlers, contact-number histogram (7), fabric (6).
-  constexpr int NC = 38;
+  constexpr int NC = kMeasureColumns;
   using mem = typename ExecSpace::memory_space;
-  Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
-  const ParticleViews<ExecSpace> pv(p);
-  auto v = p.v, w = p.w;
-  auto mass = p.mass, inertia = p.inertia;
-  auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
-  auto owned_end = nl.owned_end();
-  const PeriodicBox b = box;
-  const Model m = model;
-  const int thr = rattler_threshold;
+  const ParticleMeasure<ExecSpace, Model, HistoryView> pm{ParticleViews<ExecSpace>(p),
+                                                          p.v,
+                                                          p.w,
+                                                          p.mass,
+                                                          p.inertia,
+                                                          nl.offsets(),
+                                                          nl.neighbors(),
+                                                          nl.mirror(),
+                                                          nl.owned_end(),
+                                                          history,
+                                                          box,
+                                                          model,
+                                                          rattler_threshold};
   double max_overlap = 0.0;
-  Kokkos::parallel_reduce(
-      "dem::measure::per_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i, double& mo) {
-        constexpr int H = Model::history;  // declared here: nvcc must not capture it
-        (void)history.extent(0);           // nvcc: capture outside the constexpr-if that uses it
-        double sn[6] = {0, 0, 0, 0, 0, 0}, st[6] = {0, 0, 0, 0, 0, 0}, fab[6] = {0, 0, 0, 0, 0, 0};
-        double epot = 0.0;
-        int c = 0;
-        const double zero[3] = {0, 0, 0};
-        for (int k = offsets(i); k < offsets(i + 1); ++k) {
-          // Evaluated from the owner's side (lower identity), where the history lives;
-          // stress and energy of a pair are the same seen from either side.
-          const int j = neighbors(k);
-          const bool own = k < owned_end(i);  // owned entries come first in each row
-          const int a = own ? i : j, c2 = own ? j : i, slot = own ? k : mirror(k);
-          PairState s;
-          if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
-          double h[H > 0 ? H : 1];
-          if constexpr (H > 0)
-            for (int q = 0; q < H; ++q) h[q] = history(slot, q);
-          PairForce e;
-          m.elastic(s, h, e);
-          // sigma = (1/V) sum_c l (x) f with branch vector l = r n; each pair is seen twice.
-          const double r = s.ai + s.aj - s.delta;
-          const double l[3] = {0.5 * r * s.n[0], 0.5 * r * s.n[1], 0.5 * r * s.n[2]};
-          const double fnv[3] = {e.fn * s.n[0], e.fn * s.n[1], e.fn * s.n[2]};
-          const int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
-          for (int q = 0; q < 6; ++q) {
-            sn[q] += l[ia[q]] * fnv[ib[q]];
-            st[q] += l[ia[q]] * e.ft[ib[q]];
-            fab[q] += s.n[ia[q]] * s.n[ib[q]];
+  std::array<double, NC> sums{};
+  if constexpr (forces_by_slabs<ExecSpace>()) {
+    // Host: each fixed block of particles sums its rows as it goes, in index order (the
+    // same sums as a per-particle table would give), so no n x NC table is allocated.
+    constexpr int block = kDeterministicBlock;
+    const int nblocks = (p.n + block - 1) / block;
+    Kokkos::View<double**, Kokkos::LayoutRight, mem> partial("measure::block_sums", nblocks, NC);
+    const int n = p.n;
+    Kokkos::parallel_reduce(
+        "dem::measure::blocks", Kokkos::RangePolicy<ExecSpace>(0, nblocks),
+        KOKKOS_LAMBDA(const int bl, double& mo) {
+          double acc[NC] = {}, row[NC];
+          const int end = (bl + 1) * block < n ? (bl + 1) * block : n;
+          for (int i = bl * block; i < end; ++i) {
+            const double o = pm(i, row);
+            mo = o > mo ? o : mo;
+            for (int c = 0; c < NC; ++c) acc[c] += row[c];
           }
-          epot += 0.5 * m.energy(s, h);
-          ++c;
-          const double amin = s.ai < s.aj ? s.ai : s.aj;
-          mo = s.delta / amin > mo ? s.delta / amin : mo;
-        }
-        const double v2 = v(i, 0) * v(i, 0) + v(i, 1) * v(i, 1) + v(i, 2) * v(i, 2);
-        const double w2 = w(i, 0) * w(i, 0) + w(i, 1) * w(i, 1) + w(i, 2) * w(i, 2);
-        per(i, 0) = 0.5 * mass(i) * v2 + 0.5 * inertia(i) * w2;
-        per(i, 23) = 0.5 * inertia(i) * w2;
-        per(i, 24) = c >= thr ? static_cast<double>(c) * c : 0.0;
-        for (int q = 0; q < 7; ++q) per(i, 25 + q) = (c < 6 ? c == q : q == 6) ? 1.0 : 0.0;
-        const double ai = pv.radius(i);
-        const double vp = 4.0 / 3.0 * M_PI * ai * ai * ai;
-        for (int q = 0; q < 6; ++q) per(i, 32 + q) = vp * fab[q];
-        per(i, 1) = epot;
-        for (int q = 0; q < 6; ++q) {
-          per(i, 2 + q) = sn[q] + st[q];
-          per(i, 11 + q) = sn[q];
-          per(i, 17 + q) = st[q];
-        }
-        per(i, 8) = c;
-        per(i, 9) = c >= thr ? 1.0 : 0.0;
-        per(i, 10) = c >= thr ? c : 0.0;
-      },
-      Kokkos::Max<double>(max_overlap));
-  const auto sums = deterministic_column_sums<NC, ExecSpace>(per, p.n);
+          for (int c = 0; c < NC; ++c) partial(bl, c) = acc[c];
+        },
+        Kokkos::Max<double>(max_overlap));
+    for (int bl = 0; bl < nblocks; ++bl)
+      for (int c = 0; c < NC; ++c) sums[c] += partial(bl, c);
+  } else {
+    Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::per_particle", p.n, NC);
+    Kokkos::parallel_reduce(
+        "dem::measure::per_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+        KOKKOS_LAMBDA(const int i, double& mo) {
+          double row[NC];
+          const double o = pm(i, row);
+          mo = o > mo ? o : mo;
+          for (int c = 0; c < NC; ++c) per(i, c) = row[c];
+        },
+        Kokkos::Max<double>(max_overlap));
+    sums = deterministic_column_sums<NC, ExecSpace>(per, p.n);
+  }
   Measurements out;
   out.volume = box.volume();
   out.ekin = sums[0];

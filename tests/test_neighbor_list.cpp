@@ -179,13 +179,16 @@ TYPED_TEST(NeighborListTest, SkinCriterionNeverMissesATouchingPair) {
 TYPED_TEST(NeighborListTest, CrowdedParticleBeyondTheRowCapacityIsListedExactly) {
   using Exec = TypeParam;
   PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = 30.0;
-  std::vector<std::array<double, 4>> balls = {{15.0, 15.0, 15.0, 5.0}};  // the crowded one
-  for (int a = 0; a < 30; ++a)
-    for (int b = 0; b < 30; ++b)
-      for (int c = 0; c < 30; c += 2) {
-        const double x = a + 0.5, y = b + 0.5, z = c + 0.5 + 0.5 * (a % 2);
-        const double d2 = std::pow(x - 15, 2) + std::pow(y - 15, 2) + std::pow(z - 15, 2);
+  // The box is just over twice the big particle's cutoff (2 x 5 + skin), the least the
+  // minimum image allows, to keep the brute-force reference small.
+  const double L = 22.0, c = L / 2;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = L;
+  std::vector<std::array<double, 4>> balls = {{c, c, c, 5.0}};  // the crowded one
+  for (int a = 0; a < 22; ++a)
+    for (int b = 0; b < 22; ++b)
+      for (int k = 0; k < 22; k += 2) {
+        const double x = a + 0.5, y = b + 0.5, z = k + 0.5 + 0.5 * (a % 2);
+        const double d2 = std::pow(x - c, 2) + std::pow(y - c, 2) + std::pow(z - c, 2);
         if (d2 < 5.6 * 5.6) continue;  // keep the big one free of overlaps
         balls.push_back({x, y, z, 0.45});
       }

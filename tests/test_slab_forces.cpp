@@ -106,7 +106,9 @@ TYPED_TEST(SlabForcesTest, SlabsPartitionTheParticlesAndEveryListedPairJoinsAdja
     nl.build(p, box);
     const int slabs = nl.num_slabs();
     ASSERT_GE(slabs, 6);
-    if (periodic_z) EXPECT_EQ(slabs % 3, 0) << "three rounds cannot colour a ring of slabs";
+    if (periodic_z) {
+      EXPECT_EQ(slabs % 3, 0) << "three rounds cannot colour a ring of slabs";
+    }
     const auto hs = Kokkos::HostSpace();
     auto begin = Kokkos::create_mirror_view_and_copy(hs, nl.slab_begin());
     auto order = Kokkos::create_mirror_view_and_copy(hs, nl.cell_order());
