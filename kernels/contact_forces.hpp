@@ -276,9 +276,11 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
   Kokkos::parallel_for(
       "dem::compute_forces::damping", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
+        // Plain ifs on compile-time constants (folded all the same): nvcc's extended
+        // lambdas cannot first-capture a variable inside if constexpr.
         constexpr bool rot = Model::rotations;
         for (int d = 0; d < 3; ++d) f(i, d) = -gb * pv.v(i, d);
-        if constexpr (rot)
+        if (rot)
           for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
       });
   const int slabs = nl.num_slabs();
@@ -302,7 +304,7 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
               const int j = neighbors(k);
               double rx, ry, rz, r2;
               if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-                if constexpr (H > 0) {  // apart: the history is forgotten (mostly zero already)
+                if (H > 0) {  // apart: the history is forgotten (mostly zero already)
                   bool stale = false;
                   for (int c = 0; c < H; ++c) stale = stale || hist[k * H + c] != 0.0;
                   if (stale)
@@ -313,24 +315,24 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
               PairState s;
               pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
               double h[H > 0 ? H : 1];
-              if constexpr (H > 0)
+              if (H > 0)
                 for (int c = 0; c < H; ++c) h[c] = hist[k * H + c];
               PairForce out;
               m.evaluate(s, dt, h, out);
-              if constexpr (H > 0)
+              if (H > 0)
                 for (int c = 0; c < H; ++c) hist[k * H + c] = h[c];
               for (int d = 0; d < 3; ++d) {
                 fi[d] += out.f[d];
                 fh(j, d) -= out.f[d];
               }
-              if constexpr (rot)
+              if (rot)
                 for (int d = 0; d < 3; ++d) {
                   qi[d] += out.q[d];
                   qh(j, d) += out.qj[d];
                 }
             }
             for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
-            if constexpr (rot)
+            if (rot)
               for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
           }
         });
