@@ -258,9 +258,8 @@ struct HostParticleViews {
 
 template <class ExecSpace, class Model, class HistoryView>
 void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                             const HistoryView& history, const PeriodicBox& box,
-                             const Model& model, const Damping& damping,
-                             const double strain_rate[3], double dt) {
+                             const HistoryView& history, const PeriodicBox& box, const Model& model,
+                             const Damping& damping, const double strain_rate[3], double dt) {
   const ParticleViews<ExecSpace> pv(p);
   const HostParticleViews hv(p);
   auto f = p.f, torque = p.torque;

@@ -201,7 +201,7 @@ int main(int argc, char** argv) {
           constexpr double H = Model::history, R = Model::rotations ? 1.0 : 0.0;
           const double nb = entries / n, owned = nb / 2, contacts = z_end / 2;
           const double body_i = 24 + 24 + 24 * R + 8 + 8 + 4;  // x, v, w, radius, mass, species
-          const double body_j_rest = 24 + 24 * R + 8 + 4;     // v, w, mass, species of a partner
+          const double body_j_rest = 24 + 24 * R + 8 + 4;      // v, w, mass, species of a partner
           double force_bytes = 0;
           if (forces_by_slabs<Exec>()) {
             // Damping pass: v, w read, f, torque written. Slab pass: i's state, its list row
@@ -218,13 +218,13 @@ int main(int argc, char** argv) {
             // mirror index and the force row read, then f and torque written.
             const double row = 8 * (3 + 6 * R);
             force_bytes = body_i + 8 + owned * (4 + 24 + 8 + 8 * H + row) +
-                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 8 +
-                          nb * (4 + row) + 24 * (1 + R);
+                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 8 + nb * (4 + row) +
+                          24 * (1 + R);
           }
           // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
           // written): the closing kick of each step is deferred into the next one.
-          const double integrate_bytes = (24 + 24 + 24 + 24 * R + 24 * R + 8 + 8 * R + 24) +
-                                         (24 + 24 + 24 * R);
+          const double integrate_bytes =
+              (24 + 24 + 24 + 24 * R + 24 * R + 8 + 8 * R + 24) + (24 + 24 + 24 * R);
           const double bytes = force_bytes + integrate_bytes;
           const double med = median(rates);
           const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
