@@ -222,14 +222,6 @@ void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSp
       });
 }
 
-// One pass, for host backends: the owner of each contact evaluates it, adds the force to
-// itself and scatters the reaction to its partner at once, as a serial code with a half
-// list would. No per-contact force array, no second sweep over the list. Writes to the
-// partner cannot race because threads work on slabs of the neighbour list
-// (NeighborList::slab_begin) three slabs apart: a contact joins particles of the same or
-// adjacent slabs, so concurrent slabs never touch the same particle. Each slab is swept by
-// one thread in cell order, so every particle's sum has a fixed order whatever the thread
-// count. (A device has too few slabs to fill it; it keeps the two passes above.)
 // Raw-pointer views of the particle fields for the host kernel: the same accessors as
 // ParticleViews, without the View's run-time strides and the reloads of its metadata that
 // the compiler cannot rule out around the scattered stores.
@@ -256,6 +248,14 @@ struct HostParticleViews {
         species{p.species.data()} {}
 };
 
+// One pass, for host backends: the owner of each contact evaluates it, adds the force to
+// itself and scatters the reaction to its partner at once, as a serial code with a half
+// list would. No per-contact force array, no second sweep over the list. Writes to the
+// partner cannot race because threads work on slabs of the neighbour list
+// (NeighborList::slab_begin) three slabs apart: a contact joins particles of the same or
+// adjacent slabs, so concurrent slabs never touch the same particle. Each slab is swept by
+// one thread in cell order, so every particle's sum has a fixed order whatever the thread
+// count. (A device has too few slabs to fill it; it keeps the two passes above.)
 template <class ExecSpace, class Model, class HistoryView>
 void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                              const HistoryView& history, const PeriodicBox& box, const Model& model,

@@ -144,7 +144,7 @@ class DemSystem {
     }
     mc.validate(used);
     // Multi-contact laws act between the two passes, which need the per-contact forces.
-    size_pair_buffer(mc.mode != MultiContact::None);
+    size_pair_buffer(two_pass() || mc.mode != MultiContact::None);
     mc_.configure(mc, p_, nl_, walls_.size(), pair_.extent(0));
     initial_forces();
   }
@@ -177,7 +177,7 @@ class DemSystem {
     }
     nl_.build(p_, box_);
     history_.remap(p_, nl_, order);
-    size_pair_buffer(mc_.active());
+    size_pair_buffer(two_pass());
     mc_.after_build(p_, nl_, order, pair_.extent(0));
   }
 
@@ -306,7 +306,7 @@ class DemSystem {
       box_.periodic[d] = s[5 + 4 * d] != 0.0, rate_[d] = s[6 + 4 * d];
     }
     walls_.update(time_);
-    size_pair_buffer(mc_.active());
+    size_pair_buffer(two_pass());
   }
 
  private:
@@ -317,8 +317,8 @@ class DemSystem {
   bool two_pass() const {
     return params_.two_pass_forces || mc_.active() || !forces_by_slabs<ExecSpace>();
   }
-  void size_pair_buffer(bool multicontact) {
-    if (!two_pass() && !multicontact) {
+  void size_pair_buffer(bool needed) {
+    if (!needed) {
       pair_ = pair_view();
       return;
     }
