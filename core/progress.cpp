@@ -5,13 +5,16 @@
 
 #include <cstdio>
 
+#include "core/ensemble.hpp"
+
 namespace granular {
 
 Progress::Progress(std::string phase, long total_steps, bool enabled)
-    : phase_(std::move(phase)),
+    : phase_(ensemble::prefix() + std::move(phase)),
       total_(total_steps > 0 ? total_steps : 1),
       enabled_(enabled),
-      tty_(isatty(fileno(stderr)) != 0),
+      // Ranks share one terminal: lines, not a line redrawn in place.
+      tty_(isatty(fileno(stderr)) != 0 && ensemble::size() == 1),
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 

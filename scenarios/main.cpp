@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "core/ensemble.hpp"
 #include "core/error.hpp"
 #include "core/output.hpp"
 #include "core/scene_file.hpp"
@@ -25,6 +26,8 @@ std::string version_line() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  granular::ensemble::initialize(&argc, &argv);
+  const bool root = granular::ensemble::root();
   CLI::App app{"granular: elasticity and wave propagation of granular materials"};
   app.require_subcommand(0, 1);
   bool show_version = false;
@@ -93,6 +96,12 @@ int main(int argc, char** argv) {
   Kokkos::InitArguments args;
   args.num_threads = threads > 0 ? threads : -1;
   args.disable_warnings = true;  // OMP_PROC_BIND advice is for benchmarks, not for users
+#ifdef KOKKOS_ENABLE_CUDA
+  // One device per rank: the ranks of a machine take its GPUs in turn.
+  int devices = 0;
+  if (granular::ensemble::size() > 1 && cudaGetDeviceCount(&devices) == cudaSuccess && devices > 0)
+    args.device_id = granular::ensemble::local_rank() % devices;
+#endif
   Kokkos::initialize(args);
   int rc = 0;
   try {
@@ -109,21 +118,31 @@ int main(int argc, char** argv) {
     opts.check_only = checking;
     if (checking) {
       entry.run(scene, opts);
-      std::cout << scene_path << ": every key read and checked (" << entry.name << ")\n";
-    } else {
+      if (root) std::cout << scene_path << ": every key read and checked (" << entry.name << ")\n";
+    } else if (root) {
       granular::run_scene(entry, scene, opts);  // the driver, then the run record and report
       std::cout << "results in " << opts.out_dir << "\n";
+    } else {
+      entry.run(scene, opts);  // its share of the units; rank 0 writes every output
     }
   } catch (const granular::InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << granular::ensemble::prefix() << "error: " << e.what() << "\n";
     rc = 2;
   } catch (const granular::PhysicsError& e) {
-    std::cerr << "stopped: " << e.what() << "\n";
+    std::cerr << granular::ensemble::prefix() << "stopped: " << e.what() << "\n";
     rc = 3;
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << granular::ensemble::prefix() << "error: " << e.what() << "\n";
     rc = 1;
   }
+  // One rank's failure ends the whole run (no rank waits forever for a message); its
+  // outputs stay checkpoints and partial files, never files that look finished.
+  if (rc != 0 && granular::ensemble::size() > 1) {
+    std::cerr << "rank " << granular::ensemble::rank() << " of " << granular::ensemble::size()
+              << " failed: stopping every rank\n";
+    granular::ensemble::abort_all(rc);
+  }
   Kokkos::finalize();
+  granular::ensemble::finalize();
   return rc;
 }

@@ -9,6 +9,8 @@
 #   GRANULAR_JOBS    parallel build jobs      (default: number of cores)
 #   GRANULAR_CUDA_CHECK=1  also build the engine with the CUDA backend (compile and link
 #                    only) in $GRANULAR_CUDA_BUILD (default <repo>/build-cuda) when nvcc exists
+#   GRANULAR_MPI=0   leave OpenMPI out (installed by default: the test suite checks that an
+#                    ensemble spread over MPI ranks gives the same files as one process)
 #   GRANULAR_VIEWERS=1  also install Chromium and ParaView (about 1 GB), so that the tests
 #                    that open report.html and the XDMF time series in them run instead of
 #                    skipping
@@ -32,6 +34,9 @@ as_root() {
 packages=(build-essential g++ cmake make pkg-config ca-certificates gnupg
   libeigen3-dev libhdf5-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy)
+if [ "${GRANULAR_MPI:-1}" != 0 ]; then
+  packages+=(libopenmpi-dev openmpi-bin)
+fi
 if [ "${GRANULAR_VIEWERS:-0}" = 1 ]; then
   packages+=(chromium paraview python3-paraview)
 fi
@@ -106,7 +111,8 @@ build_kokkos "$kokkos_host" -DKokkos_ENABLE_OPENMP=ON -DKokkos_ENABLE_SERIAL=ON
 if [ "${GRANULAR_SKIP_BUILD:-0}" != 1 ]; then
   if [ ! -f "$build/CMakeCache.txt" ]; then
     say "configuring the project in $build"
-    cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_host" >/dev/null
+    cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_host" \
+      -DGRANULAR_MPI="$([ "${GRANULAR_MPI:-1}" != 0 ] && echo ON || echo OFF)" >/dev/null
   fi
   say "building the project"
   cmake --build "$build" -j "$jobs"

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "core/chain_exact.hpp"
+#include "core/ensemble.hpp"
 #include "core/progress.hpp"
 #include "kernels/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
@@ -32,49 +33,94 @@ struct ImpulseSeries {
   double bead_steps = 0;  // Verlet work (0 for the exact solver)
 };
 
-ImpulseSeries impulse_verlet(const ChainScene& cs, int source, double v0, long samples,
-                             long per_sample, bool progress_on) {
-  const int N = cs.spec.beads;
-  ChainBatch<Space> c(cs.spec, ChainBatch<Space>::first(cs.realizations));
+// Realizations are summed in fixed blocks of this many, each block in realization order,
+// then the block sums in block order: the ranks of an MPI run take whole blocks, so the
+// ensemble means are the same bits whatever the number of ranks (or threads).
+constexpr int kRealizationBlock = 32;
+
+// The sums over one block of realizations of the series of ImpulseSeries (drift: the largest).
+struct ImpulseBlock {
+  std::vector<double> profile, centre, width2, source_energy, source_ratio, drift;
+  explicit ImpulseBlock(long T = 0, int N = 0)
+      : profile(T * N, 0.0),
+        centre(T, 0.0),
+        width2(T, 0.0),
+        source_energy(T, 0.0),
+        source_ratio(T, 0.0),
+        drift(T, 0.0) {}
+  void pack(Packer& p) const {
+    p.put(profile).put(centre).put(width2).put(source_energy).put(source_ratio).put(drift);
+  }
+  static ImpulseBlock unpack(Unpacker& u) {
+    ImpulseBlock b;
+    b.profile = u.reals(), b.centre = u.reals(), b.width2 = u.reals();
+    b.source_energy = u.reals(), b.source_ratio = u.reals(), b.drift = u.reals();
+    return b;
+  }
+};
+
+// This rank's realizations: whole blocks [first, last) of realizations.
+struct BlockRange {
+  int first_block = 0, last_block = 0, first = 0, last = 0;
+};
+BlockRange my_blocks(int realizations) {
+  const auto blocks = static_cast<size_t>((realizations + kRealizationBlock - 1) / kRealizationBlock);
+  const auto [b0, b1] = ensemble::my_share(blocks);
+  BlockRange r;
+  r.first_block = static_cast<int>(b0), r.last_block = static_cast<int>(b1);
+  r.first = std::min(realizations, r.first_block * kRealizationBlock);
+  r.last = std::min(realizations, r.last_block * kRealizationBlock);
+  return r;
+}
+
+std::vector<ImpulseBlock> impulse_verlet(const ChainScene& cs, const BlockRange& mine, int source,
+                                         double v0, long samples, long per_sample,
+                                         std::vector<double>& times, bool progress_on) {
+  const int N = cs.spec.beads, n = mine.last - mine.first;
+  const long T = samples + 1;
+  std::vector<ImpulseBlock> blocks(mine.last_block - mine.first_block, ImpulseBlock(T, N));
+  times.assign(1, 0.0);
+  if (n == 0) return blocks;
+  std::vector<std::uint64_t> ids(n);
+  for (int r = 0; r < n; ++r) ids[r] = static_cast<std::uint64_t>(mine.first + r);
+  ChainBatch<Space> c(cs.spec, ids);
   chain_set_impulse(c, source, v0);
   chain_check_time_step(c, cs.dt);
   chain_accelerations(c);
   const auto t0 = chain_totals(c);
   const auto& e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
   Kokkos::View<double**, Kokkos::LayoutRight, Space::memory_space> te("te", c.R, N);
-  ImpulseSeries out;
-  out.times = {0.0}, out.centre = {static_cast<double>(source)}, out.width2 = {0.0};
-  out.drift = {0.0};
   // Each realization's source energy against its own initial energy b_source v0^2 / 2.
   const std::vector<double> source_mass = chain_bead_column<Space>(c.b, source);
-  auto record = [&] {
+  auto block_of = [&](int r) { return r / kRealizationBlock - mine.first_block; };
+  auto record = [&](long s, const ChainTotals* t) {
     chain_bead_energies(c, te);
-    const auto mean = chain_ensemble_mean<Space>(te);
-    out.profile.insert(out.profile.end(), mean.begin(), mean.end());
-    out.source_energy.push_back(mean[source]);
-    const std::vector<double> e = chain_bead_column<Space>(te, source);
-    double sum = 0;
-    for (int r = 0; r < c.R; ++r) sum += e[r] / (0.5 * source_mass[r] * v0 * v0);
-    out.source_ratio.push_back(sum / c.R);
+    const auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), te);
+    for (int r = 0; r < n; ++r) {
+      ImpulseBlock& b = blocks[block_of(mine.first + r)];
+      double* row = b.profile.data() + s * N;
+      for (int i = 0; i < N; ++i) row[i] += h(r, i);
+      b.source_energy[s] += h(r, source);
+      b.source_ratio[s] += h(r, source) / (0.5 * source_mass[r] * v0 * v0);
+      if (t) {
+        const auto& conserved = cs.spec.force == ChainForce::Hertz ? t->hertz : t->linear;
+        b.centre[s] += t->centre[r], b.width2[s] += t->width2[r];
+        b.drift[s] = std::max(b.drift[s], std::abs(conserved[r] / e0[r] - 1));
+      } else {
+        b.centre[s] += source;
+      }
+    }
   };
-  record();
+  record(0, nullptr);
   Progress progress("chain_impulse xi=" + std::to_string(cs.spec.xi), samples, progress_on);
   for (long s = 1; s <= samples; ++s) {
     const auto t = chain_advance_guarded(c, cs.dt, per_sample, e0, cs.energy_growth);
-    record();
-    double R = 0, r2 = 0, worst = 0;
-    const auto& conserved = cs.spec.force == ChainForce::Hertz ? t.hertz : t.linear;
-    for (int r = 0; r < c.R; ++r) {
-      R += t.centre[r] / c.R, r2 += t.width2[r] / c.R;
-      worst = std::max(worst, std::abs(conserved[r] / e0[r] - 1));
-    }
-    out.times.push_back(c.time), out.centre.push_back(R), out.width2.push_back(r2);
-    out.drift.push_back(worst);
+    record(s, &t);
+    times.push_back(c.time);
     progress.update(s);
   }
   progress.finish();
-  out.bead_steps = double(c.R) * N * samples * per_sample;
-  return out;
+  return blocks;
 }
 
 // The linearized chain solved exactly (chain.md section 1): each realization's eigenmodes,
@@ -82,21 +128,23 @@ ImpulseSeries impulse_verlet(const ChainScene& cs, int source, double v0, long s
 // floor limits it. Realizations go in batches of a fixed size, each batch's modes computed
 // in parallel, and the sums are taken in realization order: the result does not depend on
 // the thread count.
-ImpulseSeries impulse_exact(const ChainScene& cs, int source, double v0, long samples,
-                            bool progress_on) {
+std::vector<ImpulseBlock> impulse_exact(const ChainScene& cs, const BlockRange& mine, int source,
+                                        double v0, long samples, std::vector<double>& times,
+                                        bool progress_on) {
   using Host = Kokkos::DefaultHostExecutionSpace;
-  const int R = cs.realizations, N = cs.spec.beads, batch = 8;
+  const int N = cs.spec.beads, batch = 8;
+  static_assert(kRealizationBlock % 8 == 0, "a batch never straddles two blocks");
   const long T = samples + 1;
   const bool periodic = cs.spec.boundary == ChainBoundary::Periodic;
-  ImpulseSeries out;
-  out.profile.assign(T * N, 0.0);
-  out.centre.assign(T, 0.0), out.width2.assign(T, 0.0), out.drift.assign(T, 0.0);
-  out.source_energy.assign(T, 0.0), out.source_ratio.assign(T, 0.0);
-  for (long s = 0; s < T; ++s) out.times.push_back(s * cs.sample_every);
+  std::vector<ImpulseBlock> blocks(mine.last_block - mine.first_block, ImpulseBlock(T, N));
+  times.clear();
+  for (long s = 0; s < T; ++s) times.push_back(s * cs.sample_every);
+  const int n_all = mine.last - mine.first;
   Progress progress("chain_impulse (exact) xi=" + std::to_string(cs.spec.xi),
-                    (R + batch - 1) / batch, progress_on);
-  for (int first = 0; first < R; first += batch) {
-    const int n = std::min(batch, R - first);
+                    (n_all + batch - 1) / batch, progress_on);
+  for (int first = mine.first; first < mine.last; first += batch) {
+    const int n = std::min(batch, mine.last - first);
+    ImpulseBlock& blk = blocks[first / kRealizationBlock - mine.first_block];
     std::vector<std::uint64_t> ids(n);
     for (int r = 0; r < n; ++r) ids[r] = static_cast<std::uint64_t>(first + r);
     ChainBatch<Host> c(cs.spec, ids);
@@ -116,25 +164,57 @@ ImpulseSeries impulse_exact(const ChainScene& cs, int source, double v0, long sa
     for (long s = 0; s < T; ++s) {
       Kokkos::parallel_for("chain::exact_state", Kokkos::RangePolicy<Host>(0, n), [&](const int r) {
         Eigen::VectorXd us, vs;
-        modes[r]->state(out.times[s], us, vs);
+        modes[r]->state(times[s], us, vs);
         for (int i = 0; i < N; ++i) u(r, i) = us(i), v(r, i) = vs(i);
       });
       chain_bead_energies(c, te);
       const auto tot = chain_totals(c);
       for (int r = 0; r < n; ++r) {
-        for (int i = 0; i < N; ++i) out.profile[s * N + i] += te(r, i);
-        out.source_energy[s] += te(r, source);
-        out.source_ratio[s] += te(r, source) / (0.5 * b(r, source) * v0 * v0);
-        out.centre[s] += tot.centre[r], out.width2[s] += tot.width2[r];
-        out.drift[s] = std::max(out.drift[s], std::abs(tot.linear[r] / e0[r] - 1));
+        for (int i = 0; i < N; ++i) blk.profile[s * N + i] += te(r, i);
+        blk.source_energy[s] += te(r, source);
+        blk.source_ratio[s] += te(r, source) / (0.5 * b(r, source) * v0 * v0);
+        blk.centre[s] += tot.centre[r], blk.width2[s] += tot.width2[r];
+        blk.drift[s] = std::max(blk.drift[s], std::abs(tot.linear[r] / e0[r] - 1));
       }
     }
-    progress.update((first + n + batch - 1) / batch);
+    progress.update((first - mine.first + n + batch - 1) / batch);
   }
   progress.finish();
+  return blocks;
+}
+
+// Rank 0: every rank's blocks, summed in block order into the ensemble means (other ranks:
+// an empty series).
+ImpulseSeries ensemble_series(const std::vector<ImpulseBlock>& mine,
+                              const std::vector<double>& times, int realizations) {
+  Packer p;
+  p.put(static_cast<std::int64_t>(mine.size()));
+  for (const ImpulseBlock& b : mine) b.pack(p);
+  const std::vector<std::string> parts = ensemble::gather(p.bytes());
+  ImpulseSeries out;
+  if (!ensemble::root()) return out;
+  const long T = static_cast<long>(times.size());
+  out.times = times;
+  ImpulseBlock sum(T, static_cast<int>(mine.empty() ? 0 : mine[0].profile.size() / T));
+  for (const std::string& bytes : parts) {
+    Unpacker u(bytes);
+    const std::int64_t n = u.integer();
+    for (std::int64_t k = 0; k < n; ++k) {
+      const ImpulseBlock b = ImpulseBlock::unpack(u);
+      for (size_t i = 0; i < sum.profile.size(); ++i) sum.profile[i] += b.profile[i];
+      for (long s = 0; s < T; ++s) {
+        sum.centre[s] += b.centre[s], sum.width2[s] += b.width2[s];
+        sum.source_energy[s] += b.source_energy[s], sum.source_ratio[s] += b.source_ratio[s];
+        sum.drift[s] = std::max(sum.drift[s], b.drift[s]);
+      }
+    }
+  }
   for (auto* series :
-       {&out.profile, &out.source_energy, &out.source_ratio, &out.centre, &out.width2})
-    for (double& x : *series) x /= R;
+       {&sum.profile, &sum.source_energy, &sum.source_ratio, &sum.centre, &sum.width2})
+    for (double& x : *series) x /= realizations;
+  out.profile = std::move(sum.profile), out.centre = std::move(sum.centre);
+  out.width2 = std::move(sum.width2), out.source_energy = std::move(sum.source_energy);
+  out.source_ratio = std::move(sum.source_ratio), out.drift = std::move(sum.drift);
   return out;
 }
 
@@ -162,6 +242,24 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   const long samples = std::lround(t_max / cs.sample_every);
 
   if (!begin_outputs(opts)) return;
+  // This rank's blocks of realizations at disorder xi k; rank 0 gets the ensemble series of
+  // every rank's blocks (the other ranks an empty one).
+  auto run_xi = [&](size_t k) {
+    cs.spec.xi = cs.xis[k];
+    const BlockRange mine = my_blocks(cs.realizations);
+    std::vector<double> sample_times;
+    const std::vector<ImpulseBlock> blocks =
+        cs.exact ? impulse_exact(cs, mine, source, v0, samples, sample_times, opts.progress)
+                 : impulse_verlet(cs, mine, source, v0, samples, per_sample, sample_times,
+                                  opts.progress);
+    ImpulseSeries series = ensemble_series(blocks, sample_times, cs.realizations);
+    if (!cs.exact) series.bead_steps = double(cs.realizations) * N * samples * per_sample;
+    return series;
+  };
+  if (!ensemble::root()) {  // rank 0 alone analyses and writes
+    for (size_t k = 0; k < cs.xis.size(); ++k) run_xi(k);
+    return;
+  }
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = chain_summary_header(scene, "chain_impulse");
   Json runs = Json::array();
@@ -170,9 +268,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   for (size_t k = 0; k < cs.xis.size(); ++k) {
     cs.spec.xi = cs.xis[k];
     WallClock clock;
-    const ImpulseSeries run_series =
-        cs.exact ? impulse_exact(cs, source, v0, samples, opts.progress)
-                 : impulse_verlet(cs, source, v0, samples, per_sample, opts.progress);
+    const ImpulseSeries run_series = run_xi(k);
     const auto& times = run_series.times;
     const auto& profile = run_series.profile;
     const auto& centre = run_series.centre;

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/ensemble.hpp"
 #include "core/error.hpp"
 #include "granular_config.hpp"
 
@@ -112,6 +113,9 @@ Json run_record(double wall_seconds, const std::string& status, const std::strin
   r["cores"] = static_cast<int>(std::thread::hardware_concurrency());
   if (Kokkos::is_initialized())
     r["threads"] = static_cast<int>(Kokkos::DefaultHostExecutionSpace().concurrency());
+  // MPI ranks the run was spread over (each with `threads` threads); hostname and threads
+  // are rank 0's.
+  r["ranks"] = ensemble::size();
   r["execution_space"] = Kokkos::DefaultExecutionSpace::name();
   const int v = KOKKOS_VERSION;
   r["kokkos_version"] = std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." +

@@ -21,6 +21,7 @@
 #include <map>
 #include <optional>
 
+#include "core/ensemble.hpp"
 #include "core/output.hpp"
 #include "core/progress.hpp"
 #include "scenarios/common/config_state.hpp"
@@ -32,6 +33,7 @@
 #include "scenarios/moduli/moduli_probing.hpp"
 #include "scenarios/moduli/moduli_setup.hpp"
 #include "scenarios/moduli/moduli_theory.hpp"
+#include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -55,11 +57,23 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
 
   bool stopped = false;
+  // Over several ranks each runs its share of the variants and rank 0 reads every part back
+  // in variant order; one rank runs them all, in order, as parts of a single process.
+  const bool spread = ensemble::size() > 1;
+  std::vector<std::string> names;
+  for (const PrepVariant& v : s.variants)
+    names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
+                    (v.tag.empty() ? "" : "_" + v.tag));
+  const StudyDeal deal = s.start_from.empty()
+                             ? deal_study_units(parts, names, fingerprint, opts.resume)
+                             : StudyDeal{};
+  std::vector<std::string> ran, configs_written;
   with_contact_model(s.contact, [&](const auto& model) {
     using Model = std::decay_t<decltype(model)>;
     if (!s.start_from.empty()) {
       const ConfigState c = read_config(s.start_from);
       std::cerr << "probing the saved configuration " << s.start_from << " (phi " << c.phi << ")\n";
+      if (!ensemble::root()) return;  // one configuration: rank 0 probes it
       analyse(s, c, model,
               {{"mu_preparation", kNaN},
                {"seed", kNaN},
@@ -73,7 +87,9 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
     // branch only) and one per saved configuration.
     const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
-    Progress progress("preparation", static_cast<long>(s.variants.size() * steps), opts.progress);
+    size_t units_here = 0;  // this rank's variants and those taken from checkpoints
+    for (size_t k = 0; k < s.variants.size(); ++k) units_here += deal.done[k] || deal.mine(k);
+    Progress progress("preparation", static_cast<long>(units_here * steps), opts.progress);
     long done = 0, prepared = 0, stages_run = 0;
     const auto start = std::chrono::steady_clock::now();
     auto out_of_time = [&] {
@@ -86,16 +102,17 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
     };
     for (const PrepVariant& v : s.variants) {
-      const std::string part_name =
-          "variant_" + std::to_string(&v - s.variants.data()) + (v.tag.empty() ? "" : "_" + v.tag);
+      const size_t unit = static_cast<size_t>(&v - s.variants.data());
+      const std::string& part_name = names[unit];
       Outputs part;
-      if (opts.resume && load_moduli_part(parts, part_name, fingerprint, part)) {
-        std::cerr << "variant " << (v.tag.empty() ? part_name : v.tag)
+      if (deal.done[unit]) {
+        std::cerr << ensemble::prefix() << "variant " << (v.tag.empty() ? part_name : v.tag)
                   << ": taken from the checkpoint in " << parts << "\n";
-        out.append(part);
+        if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) out.append(part);
         progress.update(done += static_cast<long>(steps));
         continue;
       }
+      if (!deal.mine(unit)) continue;
       if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
           (prepared > 0 && out_of_time())) {
         std::cerr << "stopped after " << prepared
@@ -133,6 +150,9 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                                                {"phi_target", target}},
                                               v.tag, part);
                                     });
+      ran.push_back(part_name);
+      configs_written.insert(configs_written.end(), part.config_paths.begin(),
+                             part.config_paths.end());
       if (!finished) {
         std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
                      "continue with --resume\n";
@@ -140,10 +160,23 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         return;
       }
       save_moduli_part(parts, part_name, fingerprint, part);
-      out.append(part);
+      if (!spread) out.append(part);
     }
   });
 
+  if (spread && s.start_from.empty()) {
+    collect_study_files(parts, ran, configs_written);
+    stopped = ensemble::any(stopped);
+    if (!ensemble::root()) return;
+    if (!stopped)
+      for (const std::string& name : names) {
+        Outputs part;
+        if (!load_moduli_part(parts, name, fingerprint, part))
+          throw std::runtime_error(parts + "/" + name + ": a finished variant's part is missing");
+        out.append(part);
+      }
+  }
+  if (!ensemble::root()) return;
   if (stopped) return;  // the checkpoints in variants/ are the output so far
   H5Writer h5(opts.out_dir + "/results.h5");
   for (const auto& [k, v] : out.table) h5.write("/table/" + k, v);

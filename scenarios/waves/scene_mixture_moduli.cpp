@@ -34,6 +34,7 @@
 #include <map>
 #include <optional>
 
+#include "core/ensemble.hpp"
 #include "core/output.hpp"
 #include "core/progress.hpp"
 #include "core/rng.hpp"
@@ -43,6 +44,7 @@
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
+#include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/mixture_materials.hpp"
 
@@ -361,35 +363,63 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   // when every variant is done, so an interrupted run leaves nothing that looks finished.
   const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
   const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
-  for (const char* f : {"/summary.json", "/results.h5"})
-    std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
+  if (ensemble::root())
+    for (const char* f : {"/summary.json", "/results.h5"})
+      std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
 
+  // Over several ranks each runs its share of the mixtures and rank 0 reads every part back
+  // in mixture order; one rank runs them all, in order, as parts of a single process.
+  const bool spread = ensemble::size() > 1;
+  std::vector<std::string> names;
+  for (size_t k = 0; k < u.variants.size(); ++k)
+    names.push_back("variant_" + std::to_string(k) + "_" + u.variants[k].tag);
+  const StudyDeal deal = deal_study_units(parts, names, fingerprint, opts.resume);
   long total = 0, done = 0;
-  for (const Variant& v : u.variants) total += static_cast<long>(v.pressures.size());
+  for (size_t k = 0; k < u.variants.size(); ++k)
+    if (deal.done[k] || deal.mine(k)) total += static_cast<long>(u.variants[k].pressures.size());
   Progress progress("mixtures", total, opts.progress);
   const auto start = std::chrono::steady_clock::now();
   ModuliOutputs out;
+  std::vector<std::string> ran;
+  bool stopped = false;
   for (size_t k = 0; k < u.variants.size(); ++k) {
     const Variant& v = u.variants[k];
-    const std::string name = "variant_" + std::to_string(k) + "_" + v.tag;
+    const std::string& name = names[k];
     ModuliOutputs part;
-    if (opts.resume && load_moduli_part(parts, name, fingerprint, part)) {
-      std::cerr << v.tag << ": taken from the checkpoint in " << parts << "\n";
-      out.append(part);
+    if (deal.done[k]) {
+      std::cerr << ensemble::prefix() << v.tag << ": taken from the checkpoint in " << parts
+                << "\n";
+      if (!spread && load_moduli_part(parts, name, fingerprint, part)) out.append(part);
       progress.update(done += static_cast<long>(v.pressures.size()));
       continue;
     }
+    if (!deal.mine(k)) continue;
     const double minutes =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
     if (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes) {
-      std::cerr << "stopped after " << k << " of " << u.variants.size()
-                << " variants (--stop-after-minutes); continue with --resume\n";
-      return;
+      std::cerr << ensemble::prefix() << "stopped before variant " << k + 1 << " of "
+                << u.variants.size() << " (--stop-after-minutes); continue with --resume\n";
+      stopped = true;
+      break;
     }
     run_variant(u, v, part, progress, done);
     save_moduli_part(parts, name, fingerprint, part);
-    out.append(part);
+    ran.push_back(name);
+    if (!spread) out.append(part);
   }
+  if (spread) {
+    collect_study_files(parts, ran, {});
+    stopped = ensemble::any(stopped);
+    if (!ensemble::root()) return;
+    if (!stopped)
+      for (const std::string& name : names) {
+        ModuliOutputs part;
+        if (!load_moduli_part(parts, name, fingerprint, part))
+          throw std::runtime_error(parts + "/" + name + ": a finished mixture's part is missing");
+        out.append(part);
+      }
+  }
+  if (stopped) return;  // the checkpoints in variants/ are the output so far
   progress.finish();
 
   // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its jammed configurations.
