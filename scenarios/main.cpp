@@ -122,8 +122,12 @@ int main(int argc, char** argv) {
     } else if (root) {
       granular::run_scene(entry, scene, opts);  // the driver, then the run record and report
       std::cout << "results in " << opts.out_dir << "\n";
-    } else {
+    } else if (entry.spreads_over_ranks) {
       entry.run(scene, opts);  // its share of the units; rank 0 writes every output
+    } else if (granular::ensemble::rank() == 1) {
+      std::cerr << "scene " << entry.name << " is one simulation, not an ensemble: rank 0 runs "
+                << "it alone and the other ranks wait (ensembles: chain_impulse, "
+                   "chain_master_equation, elastic_moduli, mixture_moduli)\n";
     }
   } catch (const granular::InputError& e) {
     std::cerr << granular::ensemble::prefix() << "error: " << e.what() << "\n";

@@ -25,10 +25,10 @@ const std::vector<SceneEntry>& scene_registry() {
        run_confined_compression},
       {"elastic_moduli",
        "preparation protocol, unloading-branch configurations, elastic probing vs theory",
-       run_elastic_moduli},
+       run_elastic_moduli, true},
       {"mixture_moduli",
        "glass-rubber mixtures at target pressures: K, G, M, V_p against rubber fraction",
-       run_mixture_moduli},
+       run_mixture_moduli, true},
       // continuum law
       {"continuum_fit",
        "hypoelastic continuum law fitted to the moduli studies, checked on DEM paths",
@@ -43,10 +43,10 @@ const std::vector<SceneEntry>& scene_registry() {
       // chain scenes
       {"chain_impulse",
        "impulse on disordered granular chains: energy profile, spreading, localization",
-       run_chain_impulse},
+       run_chain_impulse, true},
       {"chain_master_equation",
        "band-energy transfer matrix Q of disordered chains and the master-equation prediction",
-       run_chain_master_equation},
+       run_chain_master_equation, true},
   };
   return entries;
 }

@@ -26,6 +26,9 @@ struct SceneEntry {
   const char* name;
   const char* description;
   SceneRunner run;
+  // The driver deals independent units (realizations, experiments, variants) over the ranks
+  // of an MPI run; the others run on rank 0 alone.
+  bool spreads_over_ranks = false;
 };
 
 const std::vector<SceneEntry>& scene_registry();

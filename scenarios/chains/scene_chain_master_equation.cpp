@@ -12,6 +12,7 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "core/ensemble.hpp"
 #include "core/master_equation.hpp"
 #include "core/progress.hpp"
 #include "kernels/chain_energy.hpp"
@@ -44,23 +45,33 @@ struct EnsembleRun {
   long bead_steps = 0;
 };
 
+// Runs the experiments `mine` = [first, last) of a batch whose rows start from the standing
+// waves `tones` (tones_each per row, rows grouped by experiment, `per_group` realizations
+// each) and returns, per experiment run here, the ensemble-mean normalized band energies
+// (B x samples+1). Every experiment's means are summed within the experiment, in
+// realization order, so which rank runs it changes nothing.
 EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tones, int tones_each,
-                              int groups, double u0, long samples, long per_sample, int B,
-                              const std::string& label, bool progress_on) {
+                              std::pair<size_t, size_t> mine, double u0, long samples,
+                              long per_sample, int B, const std::string& label, bool progress_on) {
   WallClock clock;
+  EnsembleRun out;
+  const int groups = static_cast<int>(mine.second - mine.first);
+  if (groups == 0) return out;
   const int R = cs.realizations;
   std::vector<std::uint64_t> ids;
   for (int g = 0; g < groups; ++g)
     for (int r = 0; r < R; ++r) ids.push_back(r);  // the same disorder for every experiment
+  const auto at = static_cast<std::ptrdiff_t>(mine.first * R * tones_each);
+  const std::vector<int> my_tones(tones.begin() + at,
+                                  tones.begin() + at + std::ptrdiff_t(groups) * R * tones_each);
   ChainBatch<Space> c(cs.spec, ids);
-  chain_set_standing_waves(c, tones, tones_each, u0);
+  chain_set_standing_waves(c, my_tones, tones_each, u0);
   chain_check_time_step(c, cs.dt);
   chain_accelerations(c);
   const auto t0 = chain_totals(c);
   const auto e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
   const int L = cs.spec.sites();
   ChainSpectrum spectrum(c.R, chain_lattice(cs.spec));
-  EnsembleRun out;
   out.bands.assign(groups, Eigen::MatrixXd::Zero(B, samples + 1));
   const int first_half = R / 2;
   for (auto& h : out.half) h.assign(groups, Eigen::MatrixXd::Zero(B, samples + 1));
@@ -86,6 +97,35 @@ EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tone
   progress.finish();
   out.seconds = clock.seconds();
   out.bead_steps = static_cast<long>(c.R) * c.N * samples * per_sample;
+  return out;
+}
+
+// Rank 0: the experiments of every rank in rank order (= experiment order), the largest
+// compute time (the ensemble's wall time) and the summed work; other ranks: an empty run.
+EnsembleRun gather_band_runs(const EnsembleRun& mine, int B, long samples) {
+  Packer p;
+  p.put(mine.times).put(mine.max_imag).put(mine.seconds);
+  p.put(static_cast<std::int64_t>(mine.bead_steps));
+  p.put(static_cast<std::int64_t>(mine.bands.size()));
+  for (size_t g = 0; g < mine.bands.size(); ++g)
+    for (const Eigen::MatrixXd* m : {&mine.bands[g], &mine.half[0][g], &mine.half[1][g]})
+      p.put(std::vector<double>(m->data(), m->data() + m->size()));
+  const std::vector<std::string> all = ensemble::gather(p.bytes());
+  EnsembleRun out;
+  for (const std::string& bytes : all) {
+    Unpacker u(bytes);
+    std::vector<double> times = u.reals();
+    if (out.times.empty()) out.times = std::move(times);
+    out.max_imag = std::max(out.max_imag, u.real());
+    out.seconds = std::max(out.seconds, u.real());
+    out.bead_steps += static_cast<long>(u.integer());
+    const std::int64_t n = u.integer();
+    for (std::int64_t g = 0; g < n; ++g)
+      for (auto* list : {&out.bands, &out.half[0], &out.half[1]}) {
+        const std::vector<double> v = u.reals();
+        list->push_back(Eigen::Map<const Eigen::MatrixXd>(v.data(), B, samples + 1));
+      }
+  }
   return out;
 }
 
@@ -139,20 +179,43 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   const int R = cs.realizations;
 
   if (!begin_outputs(opts)) return;
+  std::vector<int> band_tones;
+  for (int s = 0; s < B; ++s) band_tones.push_back(chain_band_tone(s, L, B));
+  // The ensembles at disorder xi k: the B tone experiments dealt over the ranks, the
+  // two-tone validation (one experiment) run by the last rank; rank 0 gets both whole.
+  auto run_ensembles = [&](size_t k) {
+    cs.spec.xi = cs.xis[k];
+    // One experiment per band: R realizations of the chain start from that band's tone.
+    std::vector<int> tones;
+    for (int s = 0; s < B; ++s) tones.insert(tones.end(), R, band_tones[s]);
+    const EnsembleRun fit = gather_band_runs(
+        run_band_ensemble(cs, tones, 1, ensemble::my_share(B), u0, samples, per_sample, B,
+                          "Q fit xi=" + std::to_string(cs.spec.xi), opts.progress),
+        B, samples);
+    // Validation: two tones together, a state none of the fits saw, run for longer.
+    const int b1 = static_cast<int>(check_bands[0]), b2 = static_cast<int>(check_bands[1]);
+    std::vector<int> pair;
+    for (int r = 0; r < R; ++r) pair.push_back(band_tones[b1]), pair.push_back(band_tones[b2]);
+    const bool runner = ensemble::rank() == ensemble::size() - 1;
+    const EnsembleRun check = gather_band_runs(
+        run_band_ensemble(cs, pair, 2, {0, runner ? 1 : 0}, u0, check_samples, per_sample, B,
+                          "validation xi=" + std::to_string(cs.spec.xi), opts.progress),
+        B, check_samples);
+    return std::make_pair(fit, check);
+  };
+  if (!ensemble::root()) {  // rank 0 alone fits, predicts and writes
+    for (size_t k = 0; k < cs.xis.size(); ++k) run_ensembles(k);
+    return;
+  }
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = chain_summary_header(scene, "chain_master_equation");
   Json runs = Json::array();
   WallClock total_clock;
   Json cost_runs = Json::array();
-  std::vector<int> band_tones;
-  for (int s = 0; s < B; ++s) band_tones.push_back(chain_band_tone(s, L, B));
   for (size_t k = 0; k < cs.xis.size(); ++k) {
-    cs.spec.xi = cs.xis[k];
-    // One experiment per band: R realizations of the chain start from that band's tone.
-    std::vector<int> tones;
-    for (int s = 0; s < B; ++s) tones.insert(tones.end(), R, band_tones[s]);
-    const auto fit_run = run_band_ensemble(cs, tones, 1, B, u0, samples, per_sample, B,
-                                           "Q fit xi=" + std::to_string(cs.spec.xi), opts.progress);
+    const auto ens = run_ensembles(k);
+    const EnsembleRun& fit_run = ens.first;
+    const EnsembleRun& check = ens.second;
     BandSeries data{fit_run.times, fit_run.bands};
     const Eigen::MatrixXd Q1 = fit_transfer_matrix_nonlinear(data, fw1);
     const Eigen::MatrixXd Q2 = fit_transfer_matrix_linear(data, fw2);
@@ -204,13 +267,7 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
       one["rms_error_at_horizon"] = rms.back();
       held_out[name] = one;
     }
-    // Validation: two tones together, a state none of the fits saw, run for longer.
     const int b1 = static_cast<int>(check_bands[0]), b2 = static_cast<int>(check_bands[1]);
-    std::vector<int> pair;
-    for (int r = 0; r < R; ++r) pair.push_back(band_tones[b1]), pair.push_back(band_tones[b2]);
-    const auto check =
-        run_band_ensemble(cs, pair, 2, 1, u0, check_samples, per_sample, B,
-                          "validation xi=" + std::to_string(cs.spec.xi), opts.progress);
     const Eigen::MatrixXd& sim = check.bands[0];
     WallClock me_clock;
     const Eigen::MatrixXd pred1 =

@@ -274,7 +274,8 @@ def main(argv):
         order = [("wall_time_s", "wall time", "s"), ("started_utc", "started (UTC)", ""),
                  ("finished_utc", "finished (UTC)", ""), ("hostname", "host", ""),
                  ("cpu", "processor", ""), ("cores", "cores", ""),
-                 ("threads", "host threads", ""), ("execution_space", "execution space", ""),
+                 ("threads", "host threads", ""), ("ranks", "MPI ranks", ""),
+                 ("execution_space", "execution space", ""),
                  ("kokkos_backends", "Kokkos backends", ""),
                  ("kokkos_version", "Kokkos", ""), ("granular_version", "granular", ""),
                  ("system", "system", "")]
