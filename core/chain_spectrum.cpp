@@ -108,4 +108,12 @@ int chain_band_tone(int band, int sites, int bands) {
   return (lo + hi) / 2;
 }
 
+int chain_band_edge_tone(int band, int sites, int bands) {
+  int last = -1;
+  for (int j = 1; j <= sites / 2; ++j)
+    if (chain_band_of_bin(j, sites, bands) == band) last = j;
+  // N = L/2 is sin(pi i) = 0 at every bead: the last band takes the bin below it.
+  return last == sites / 2 ? last - 1 : last;
+}
+
 }  // namespace granular

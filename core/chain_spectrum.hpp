@@ -54,5 +54,9 @@ std::vector<double> chain_band_energies(const std::vector<double>& bins, int rea
                                         int sites, int bands);
 // The standing-wave tone placed at the centre of band r.
 int chain_band_tone(int band, int sites, int bands);
+// The tone at the upper edge of band r (its last bin): the source's N = 4 (r + 1) for
+// L = 256 sites and 32 bands, except for the last band, whose edge N = L/2 vanishes on
+// every bead (sin(pi i)): it gets the bin below, N = L/2 - 1.
+int chain_band_edge_tone(int band, int sites, int bands);
 
 }  // namespace granular

@@ -47,6 +47,9 @@ const std::vector<SceneEntry>& scene_registry() {
       {"chain_master_equation",
        "band-energy transfer matrix Q of disordered chains and the master-equation prediction",
        run_chain_master_equation, true},
+      {"chain_tones",
+       "standing-wave tones: space-time maps, band-energy curves, fit views, amplitude check",
+       run_chain_tones},
   };
   return entries;
 }

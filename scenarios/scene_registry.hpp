@@ -66,5 +66,6 @@ void run_wave_transmission(const SceneFile&, const RunOptions&);
 // chain scenes
 void run_chain_impulse(const SceneFile&, const RunOptions&);
 void run_chain_master_equation(const SceneFile&, const RunOptions&);
+void run_chain_tones(const SceneFile&, const RunOptions&);
 
 }  // namespace granular

@@ -96,6 +96,18 @@ TEST(ChainSpectrum, BandsOfWidthPiOverBCoverEveryWavenumberAndTonesSitInsideThei
     EXPECT_EQ(chain_band_of_bin(chain_band_tone(b, 256, 32), 256, 32), b);
 }
 
+TEST(ChainSpectrum, UpperEdgeTonesAreTheSourcesFourR) {
+  // The source agitates N = 4, 8, ..., 128 for L = 256, B = 32: band r - 1 for N = 4r; the
+  // last, N = 128 = L/2, is zero on every bead, so band 31 takes N = 127.
+  for (int b = 0; b < 32; ++b) {
+    EXPECT_EQ(chain_band_edge_tone(b, 256, 32), b < 31 ? 4 * (b + 1) : 127);
+    EXPECT_EQ(chain_band_of_bin(chain_band_edge_tone(b, 256, 32), 256, 32), b);
+    if (b + 1 < 32) {  // the next bin opens the next band
+      EXPECT_EQ(chain_band_of_bin(chain_band_edge_tone(b, 256, 32) + 1, 256, 32), b + 1);
+    }
+  }
+}
+
 // A standing tone of the ordered chain puts all its energy into the tone's own bin.
 TEST(ChainSpectrum, OrderedStandingToneIsASingleWavenumber) {
   ChainSpec s;

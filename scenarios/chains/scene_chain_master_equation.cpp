@@ -134,6 +134,11 @@ EnsembleRun gather_band_runs(const EnsembleRun& mine, int B, long samples) {
 void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   ChainScene cs = read_chain_scene(scene);
   const int B = static_cast<int>(scene.integer("bands.count"));
+  // Where each band's tone sits: its middle bin (default), or its last bin, the source's
+  // N = 4, 8, ..., 128 for L = 256 and B = 32 (N = 4r agitates band r - 1).
+  const std::string placement = scene.text("bands.tone_placement", "centre");
+  scene.require(placement == "centre" || placement == "upper_edge", "bands.tone_placement",
+                "must be \"centre\" or \"upper_edge\"");
   const double u0 = scene.real("wave.u0", 0.01);
   const long samples = scene.integer("time.samples");
   const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
@@ -180,7 +185,9 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
 
   if (!begin_outputs(opts)) return;
   std::vector<int> band_tones;
-  for (int s = 0; s < B; ++s) band_tones.push_back(chain_band_tone(s, L, B));
+  for (int s = 0; s < B; ++s)
+    band_tones.push_back(placement == "upper_edge" ? chain_band_edge_tone(s, L, B)
+                                                   : chain_band_tone(s, L, B));
   // The ensembles at disorder xi k: the B tone experiments dealt over the ranks, the
   // two-tone validation (one experiment) run by the last rank; rank 0 gets both whole.
   auto run_ensembles = [&](size_t k) {
@@ -392,6 +399,8 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "bands", B);
   h5.commit();
   summary["runs"] = runs;
+  summary["band_tones"] = std::vector<double>(band_tones.begin(), band_tones.end());
+  summary["tone_placement"] = placement;
   Json cost = Json::object();
   cost["realizations"] = use_realizations;
   cost["horizon"] = use_horizon;

@@ -1,0 +1,305 @@
+// Scene `chain_tones`: standing-wave tones on disordered chains, looked at the ways the source
+// study shows them (chain.md sections 3-5): space-time maps of one realization's
+// displacement u_p(t), bead energy TE_p(t) and spectral energy TE^(k)(t); band-energy curves
+// of one realization against the ensemble, of the agitated band against the disorder and of
+// several bands at one disorder; what each master-equation fitting procedure sees (decay of
+// the agitated band, rise of its neighbour, with both fits over their windows); and the check
+// that two amplitudes u0 differ only in amplitude (the linear regime).
+// Tones are given as wavenumbers N (u_i = u0 sin(N 2 pi i / L)): the source's N = 4r, band
+// centres (wave.bands), or N = 1 for the fundamental.
+#include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
+#include "core/chain_spectrum.hpp"
+#include "core/master_equation.hpp"
+#include "core/output.hpp"
+#include "core/progress.hpp"
+#include "kernels/chain_energy.hpp"
+#include "scenarios/chains/chain_config.hpp"
+#include "scenarios/scene_registry.hpp"
+
+namespace granular {
+
+namespace {
+
+using Space = Kokkos::DefaultExecutionSpace;
+
+// One experiment: R realizations from one tone at one amplitude. Series are (rows x T),
+// row-major, T = samples + 1.
+struct ToneRun {
+  int tone = 0;
+  double u0 = 0;
+  std::vector<double> bands_mean;    // ensemble-mean normalized band energies (B x T)
+  std::vector<double> bands_one;     // the mapped realization's (B x T)
+  std::vector<double> spectrum_one;  // its TE^(k) / its total energy (bins x T)
+  std::vector<double> u_one, te_one;  // its displacement and bead energy maps (N x T)
+  std::vector<double> total_mean;    // ensemble-mean total energy (T)
+};
+
+// All experiments of one disorder in one batch (experiment-major rows, R rows each).
+std::vector<ToneRun> run_tones(const ChainScene& cs, const std::vector<int>& tones,
+                               const std::vector<double>& amplitudes, int B, long samples,
+                               long per_sample, int mapped, std::vector<double>& times,
+                               bool progress_on) {
+  const int R = cs.realizations, N = cs.spec.beads, L = cs.spec.sites();
+  const long T = samples + 1;
+  std::vector<ToneRun> runs;
+  for (int t : tones)
+    for (double a : amplitudes) {
+      ToneRun run;
+      run.tone = t, run.u0 = a;
+      run.bands_mean.assign(B * T, 0.0), run.bands_one.assign(B * T, 0.0);
+      run.u_one.assign(N * T, 0.0), run.te_one.assign(N * T, 0.0);
+      run.total_mean.assign(T, 0.0);
+      runs.push_back(std::move(run));
+    }
+  const int G = static_cast<int>(runs.size());
+  std::vector<std::uint64_t> ids;
+  for (int g = 0; g < G; ++g)
+    for (int r = 0; r < R; ++r) ids.push_back(r);  // the same disorder in every experiment
+  ChainBatch<Space> c(cs.spec, ids);
+  // chain_set_standing_waves takes one amplitude: set each experiment's rows, then scale.
+  std::vector<int> row_tones;
+  for (const ToneRun& run : runs) row_tones.insert(row_tones.end(), R, run.tone);
+  chain_set_standing_waves(c, row_tones, 1, 1.0);
+  {
+    auto hu = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), c.u);
+    for (int row = 0; row < c.R; ++row)
+      for (int i = 0; i < N; ++i) hu(row, i) *= runs[row / R].u0;
+    Kokkos::deep_copy(c.u, hu);
+  }
+  chain_check_time_step(c, cs.dt);
+  chain_accelerations(c);
+  const auto t0 = chain_totals(c);
+  const auto e0 = cs.spec.force == ChainForce::Hertz ? t0.hertz : t0.linear;
+  ChainSpectrum spectrum(c.R, chain_lattice(cs.spec));
+  const int bins = spectrum.lattice().bins();
+  for (ToneRun& run : runs) run.spectrum_one.assign(bins * T, 0.0);
+  Kokkos::View<double**, Kokkos::LayoutRight, Space::memory_space> te("te", c.R, N);
+  times.clear();
+  Progress progress("chain_tones xi=" + std::to_string(cs.spec.xi), samples, progress_on);
+  for (long s = 0; s < T; ++s) {
+    if (s > 0) chain_advance_guarded(c, cs.dt, per_sample, e0, cs.energy_growth);
+    times.push_back(c.time);
+    chain_spectrum(spectrum, c);
+    const std::vector<double> e = chain_band_energies(spectrum.bins(), c.R, L, B);
+    chain_bead_energies(c, te);
+    const auto hte = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), te);
+    const auto hu = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), c.u);
+    for (int row = 0; row < c.R; ++row) {
+      ToneRun& run = runs[row / R];
+      const int r = row % R;
+      double total = 0;
+      for (int q = 0; q < B; ++q) total += e[row * B + q];
+      for (int q = 0; q < B; ++q) run.bands_mean[q * T + s] += e[row * B + q] / total / R;
+      run.total_mean[s] += total / R;
+      if (r != mapped) continue;
+      for (int q = 0; q < B; ++q) run.bands_one[q * T + s] = e[row * B + q] / total;
+      for (int j = 0; j < bins; ++j)
+        run.spectrum_one[j * T + s] = spectrum.bins()[row * bins + j] / total;
+      for (int i = 0; i < N; ++i) run.u_one[i * T + s] = hu(row, i), run.te_one[i * T + s] = hte(row, i);
+    }
+    if (s > 0) progress.update(s);
+  }
+  progress.finish();
+  return runs;
+}
+
+std::vector<double> row(const std::vector<double>& m, int r, long T) {
+  return std::vector<double>(m.begin() + r * T, m.begin() + (r + 1) * T);
+}
+
+}  // namespace
+
+void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
+  ChainScene cs = read_chain_scene(scene);
+  const int B = static_cast<int>(scene.integer("bands.count"));
+  const long samples = scene.integer("time.samples");
+  std::vector<double> tone_list = scene.reals("wave.tones", {});
+  const std::vector<double> centre_bands = scene.reals("wave.bands", {});
+  const std::vector<double> amplitudes = scene.reals("wave.u0", {0.01, 0.001});
+  const int mapped = static_cast<int>(scene.integer("maps.realization", 0));
+  const double fit_tone = scene.real("fit.tone", -1);
+  const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
+  const auto w2 = scene.reals("fit.window_linear", {2, 8});
+  const int L = cs.spec.sites();
+  scene.require(!cs.exact, "time.solver", "must be \"verlet\" here");
+  scene.require(cs.spec.boundary == ChainBoundary::Fixed || L % 2 == 0, "chain.beads",
+                "must be even for a periodic ring");
+  scene.require(B >= 2 && B <= L / 2, "bands.count",
+                "must be between 2 and L/2 = " + std::to_string(L / 2));
+  scene.require(samples >= 3, "time.samples", "must be at least 3");
+  for (double b : centre_bands) {
+    scene.require(b >= 0 && b < B && b == std::floor(b), "wave.bands",
+                  "must be band indices in [0, bands.count)");
+    tone_list.push_back(chain_band_tone(static_cast<int>(b), L, B));
+  }
+  scene.require(!tone_list.empty(), "wave.tones", "give wave.tones and/or wave.bands");
+  std::vector<int> tones;
+  for (double t : tone_list) {
+    scene.require(t >= 1 && t <= L / 2 && t == std::floor(t), "wave.tones",
+                  "must be whole wavenumbers in [1, L/2 = " + std::to_string(L / 2) + "]");
+    if (std::find(tones.begin(), tones.end(), static_cast<int>(t)) == tones.end())
+      tones.push_back(static_cast<int>(t));
+  }
+  scene.require(!amplitudes.empty(), "wave.u0", "must list at least one amplitude");
+  for (double a : amplitudes)
+    scene.require(a > 0 && a < 0.1, "wave.u0", "must be in (0, 0.1): small against the overlap");
+  scene.require(mapped >= 0 && mapped < cs.realizations, "maps.realization",
+                "must be a realization index below disorder.realizations");
+  scene.require(fit_tone < 0 || std::find(tones.begin(), tones.end(), int(fit_tone)) != tones.end(),
+                "fit.tone", "must be one of the tones");
+  auto window = [&](const std::vector<double>& w, const char* key) {
+    scene.require(w.size() == 2 && w[0] >= 0 && w[1] > w[0] + 1 && w[1] <= samples, key,
+                  "must be [first, last] sample indices within time.samples");
+    return FitWindow{static_cast<int>(w[0]), static_cast<int>(w[1])};
+  };
+  const FitWindow fw1 = window(w1, "fit.window_nonlinear"), fw2 = window(w2, "fit.window_linear");
+  scene.require_memory("time.samples", 8.0 * (samples + 1) * (2.0 * B + 3.0 * L) *
+                                           tones.size() * amplitudes.size() * cs.xis.size());
+  const long per_sample = chain_steps_per_sample(scene, cs);
+  scene.reject_unknown_keys();
+  if (!begin_outputs(opts)) return;
+
+  const long T = samples + 1;
+  const int N = cs.spec.beads;
+  // The fits are drawn for this tone (default: the lowest tone above the fundamental band).
+  int ftone = fit_tone > 0 ? static_cast<int>(fit_tone) : tones.back();
+  if (fit_tone <= 0)
+    for (int t : tones)
+      if (chain_band_of_bin(t, L, B) > 0) {
+        ftone = t;
+        break;
+      }
+  const int fband = chain_band_of_bin(ftone, L, B);
+  const int nband = fband + 1 < B ? fband + 1 : fband - 1;  // the neighbour whose rise is fitted
+
+  H5Writer h5(opts.out_dir + "/results.h5");
+  Json summary = chain_summary_header(scene, "chain_tones");
+  Json runs_json = Json::array();
+  WallClock clock;
+  for (size_t k = 0; k < cs.xis.size(); ++k) {
+    cs.spec.xi = cs.xis[k];
+    std::vector<double> times;
+    const std::vector<ToneRun> runs = run_tones(cs, tones, amplitudes, B, samples, per_sample,
+                                                mapped, times, opts.progress);
+    const std::string g = "/xi_" + std::to_string(k);
+    h5.write(g + "/times", times);
+    h5.attribute(g, "xi", cs.spec.xi);
+    const int bins = static_cast<int>(runs[0].spectrum_one.size() / T);
+    for (const ToneRun& run : runs) {
+      char name[96];
+      std::snprintf(name, sizeof name, "%s/tone_%d_u0_%g", g.c_str(), run.tone, run.u0);
+      const std::string t = name;
+      const auto TT = static_cast<hsize_t>(T);
+      h5.write(t + "/bands_mean", run.bands_mean, {static_cast<hsize_t>(B), TT});
+      h5.write(t + "/bands_one", run.bands_one, {static_cast<hsize_t>(B), TT});
+      h5.write(t + "/spectrum_one", run.spectrum_one, {static_cast<hsize_t>(bins), TT});
+      h5.write(t + "/u_one", run.u_one, {static_cast<hsize_t>(N), TT});
+      h5.write(t + "/te_one", run.te_one, {static_cast<hsize_t>(N), TT});
+      h5.write(t + "/total_mean", run.total_mean);
+      h5.attribute(t, "tone", run.tone);
+      h5.attribute(t, "u0", run.u0);
+      h5.attribute(t, "band", chain_band_of_bin(run.tone, L, B));
+    }
+    Json xj = Json::object();
+    xj["xi"] = cs.spec.xi;
+    // Amplitude check per tone: normalized band energies and u/u0 maps of the first and every
+    // other amplitude; the energy ratio against (u0 ratio)^2.
+    Json checks = Json::array();
+    const size_t A = amplitudes.size();
+    for (size_t ti = 0; ti < tones.size(); ++ti) {
+      const ToneRun& ref = runs[ti * A];
+      for (size_t a = 1; a < A; ++a) {
+        const ToneRun& run = runs[ti * A + a];
+        double dband = 0, du = 0, umax = 0;
+        for (size_t i = 0; i < ref.bands_mean.size(); ++i)
+          dband = std::max(dband, std::abs(ref.bands_mean[i] - run.bands_mean[i]));
+        for (size_t i = 0; i < ref.u_one.size(); ++i) {
+          du = std::max(du, std::abs(ref.u_one[i] / ref.u0 - run.u_one[i] / run.u0));
+          umax = std::max(umax, std::abs(ref.u_one[i] / ref.u0));
+        }
+        Json c = Json::object();
+        c["tone"] = static_cast<double>(ref.tone);
+        c["u0"] = std::vector<double>{ref.u0, run.u0};
+        c["max_abs_difference_normalized_band_energies"] = dband;
+        c["max_difference_u_over_u0_relative"] = du / umax;
+        c["energy_ratio_over_amplitude_ratio_squared"] =
+            (ref.total_mean[0] / run.total_mean[0]) / std::pow(ref.u0 / run.u0, 2);
+        checks.push(c);
+      }
+    }
+    xj["amplitude_check"] = checks;
+    // What the fitting procedures see (first amplitude): decay of the agitated band, rise of
+    // its neighbour, each with procedure 1 (exponential, long window) and 2 (linear, short).
+    const ToneRun& fr = runs[(std::find(tones.begin(), tones.end(), ftone) - tones.begin()) * A];
+    const std::vector<double> decay = row(fr.bands_mean, fband, T);
+    const std::vector<double> rise = row(fr.bands_mean, nband, T);
+    auto slice = [&](const std::vector<double>& v, FitWindow w) {
+      return std::vector<double>(v.begin() + w.first, v.begin() + w.last + 1);
+    };
+    const std::vector<double> t1 = slice(times, fw1), t2 = slice(times, fw2);
+    const ExpFit d1 = fit_decay(t1, slice(decay, fw1));
+    const ExpFit r1 = fit_rise(t1, slice(rise, fw1));
+    // Procedure 2: straight lines through (t, 1 - e_s) and (t, e_r), least squares through 0.
+    auto slope_through_origin = [](const std::vector<double>& t, const std::vector<double>& y) {
+      double ty = 0, tt = 0;
+      for (size_t i = 0; i < t.size(); ++i) ty += t[i] * y[i], tt += t[i] * t[i];
+      return ty / tt;
+    };
+    std::vector<double> loss = slice(decay, fw2);
+    for (double& e : loss) e = 1 - e;
+    const double x1 = slope_through_origin(t2, loss);
+    const double x2 = slope_through_origin(t2, slice(rise, fw2));
+    Json fit = Json::object();
+    fit["tone"] = static_cast<double>(ftone);
+    fit["agitated_band"] = static_cast<double>(fband);
+    fit["neighbour_band"] = static_cast<double>(nband);
+    fit["decay_nonlinear"] = std::vector<double>{d1.y, d1.z};  // (1 - y1) e^{-z1 t} + y1
+    fit["rise_nonlinear"] = std::vector<double>{r1.y, r1.z};   // y2 (1 - e^{-z2 t})
+    fit["Q_ss_nonlinear"] = -d1.z * (1 - d1.y);
+    fit["Q_rs_nonlinear"] = r1.y * r1.z;
+    fit["Q_ss_linear"] = -x1;
+    fit["Q_rs_linear"] = x2;
+    fit["agitated_band_energy_at_end"] = decay.back();
+    xj["fits"] = fit;
+    const std::string fg = g + "/fits";
+    h5.write(fg + "/decay", decay);
+    h5.write(fg + "/rise", rise);
+    h5.write(fg + "/decay_nonlinear", std::vector<double>{d1.y, d1.z});
+    h5.write(fg + "/rise_nonlinear", std::vector<double>{r1.y, r1.z});
+    h5.write(fg + "/linear_slopes", std::vector<double>{x1, x2});
+    h5.attribute(fg, "tone", ftone);
+    h5.attribute(fg, "agitated_band", fband);
+    h5.attribute(fg, "neighbour_band", nband);
+    runs_json.push(xj);
+    std::cout << "xi = " << cs.spec.xi << ": tone " << ftone << " (band " << fband
+              << ") keeps " << decay.back() << " of its energy at t = " << times.back()
+              << "; Q_ss " << -d1.z * (1 - d1.y) << " (procedure 1), " << -x1
+              << " (procedure 2)\n";
+  }
+  h5.attribute("/", "bands", B);
+  h5.attribute("/", "beads", N);
+  h5.attribute("/", "sites", L);
+  h5.attribute("/", "mapped_realization", mapped);
+  h5.attribute("/", "window_nonlinear_first", fw1.first);
+  h5.attribute("/", "window_nonlinear_last", fw1.last);
+  h5.attribute("/", "window_linear_first", fw2.first);
+  h5.attribute("/", "window_linear_last", fw2.last);
+  h5.commit();
+  summary["tones"] = std::vector<double>(tones.begin(), tones.end());
+  std::vector<double> tone_bands;
+  for (int t : tones) tone_bands.push_back(chain_band_of_bin(t, L, B));
+  summary["tone_bands"] = tone_bands;
+  summary["tone_note"] =
+      "u_i = u0 sin(N 2 pi i / L); tone N lies in band (N - 1) B / (L/2), so the source's "
+      "N = 4r sits at the upper edge of band r - 1 and a band centre (wave.bands) mid-band";
+  summary["runs"] = runs_json;
+  summary["wall_seconds"] = clock.seconds();
+  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  if (opts.charts) run_plot_script("chain_tones.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace granular
