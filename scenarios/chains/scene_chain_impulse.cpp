@@ -64,7 +64,8 @@ struct BlockRange {
   int first_block = 0, last_block = 0, first = 0, last = 0;
 };
 BlockRange my_blocks(int realizations) {
-  const auto blocks = static_cast<size_t>((realizations + kRealizationBlock - 1) / kRealizationBlock);
+  const auto blocks =
+      static_cast<size_t>((realizations + kRealizationBlock - 1) / kRealizationBlock);
   const auto [b0, b1] = ensemble::my_share(blocks);
   BlockRange r;
   r.first_block = static_cast<int>(b0), r.last_block = static_cast<int>(b1);

@@ -31,11 +31,11 @@ using Space = Kokkos::DefaultExecutionSpace;
 struct ToneRun {
   int tone = 0;
   double u0 = 0;
-  std::vector<double> bands_mean;    // ensemble-mean normalized band energies (B x T)
-  std::vector<double> bands_one;     // the mapped realization's (B x T)
-  std::vector<double> spectrum_one;  // its TE^(k) / its total energy (bins x T)
+  std::vector<double> bands_mean;     // ensemble-mean normalized band energies (B x T)
+  std::vector<double> bands_one;      // the mapped realization's (B x T)
+  std::vector<double> spectrum_one;   // its TE^(k) / its total energy (bins x T)
   std::vector<double> u_one, te_one;  // its displacement and bead energy maps (N x T)
-  std::vector<double> total_mean;    // ensemble-mean total energy (T)
+  std::vector<double> total_mean;     // ensemble-mean total energy (T)
 };
 
 // All experiments of one disorder in one batch (experiment-major rows, R rows each).
@@ -99,7 +99,8 @@ std::vector<ToneRun> run_tones(const ChainScene& cs, const std::vector<int>& ton
       for (int q = 0; q < B; ++q) run.bands_one[q * T + s] = e[row * B + q] / total;
       for (int j = 0; j < bins; ++j)
         run.spectrum_one[j * T + s] = spectrum.bins()[row * bins + j] / total;
-      for (int i = 0; i < N; ++i) run.u_one[i * T + s] = hu(row, i), run.te_one[i * T + s] = hte(row, i);
+      for (int i = 0; i < N; ++i)
+        run.u_one[i * T + s] = hu(row, i), run.te_one[i * T + s] = hte(row, i);
     }
     if (s > 0) progress.update(s);
   }
@@ -157,8 +158,8 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
     return FitWindow{static_cast<int>(w[0]), static_cast<int>(w[1])};
   };
   const FitWindow fw1 = window(w1, "fit.window_nonlinear"), fw2 = window(w2, "fit.window_linear");
-  scene.require_memory("time.samples", 8.0 * (samples + 1) * (2.0 * B + 3.0 * L) *
-                                           tones.size() * amplitudes.size() * cs.xis.size());
+  scene.require_memory("time.samples", 8.0 * (samples + 1) * (2.0 * B + 3.0 * L) * tones.size() *
+                                           amplitudes.size() * cs.xis.size());
   const long per_sample = chain_steps_per_sample(scene, cs);
   scene.reject_unknown_keys();
   if (!begin_outputs(opts)) return;
@@ -183,8 +184,8 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
   for (size_t k = 0; k < cs.xis.size(); ++k) {
     cs.spec.xi = cs.xis[k];
     std::vector<double> times;
-    const std::vector<ToneRun> runs = run_tones(cs, tones, amplitudes, B, samples, per_sample,
-                                                mapped, times, opts.progress);
+    const std::vector<ToneRun> runs =
+        run_tones(cs, tones, amplitudes, B, samples, per_sample, mapped, times, opts.progress);
     const std::string g = "/xi_" + std::to_string(k);
     h5.write(g + "/times", times);
     h5.attribute(g, "xi", cs.spec.xi);
@@ -275,10 +276,9 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
     h5.attribute(fg, "agitated_band", fband);
     h5.attribute(fg, "neighbour_band", nband);
     runs_json.push(xj);
-    std::cout << "xi = " << cs.spec.xi << ": tone " << ftone << " (band " << fband
-              << ") keeps " << decay.back() << " of its energy at t = " << times.back()
-              << "; Q_ss " << -d1.z * (1 - d1.y) << " (procedure 1), " << -x1
-              << " (procedure 2)\n";
+    std::cout << "xi = " << cs.spec.xi << ": tone " << ftone << " (band " << fband << ") keeps "
+              << decay.back() << " of its energy at t = " << times.back() << "; Q_ss "
+              << -d1.z * (1 - d1.y) << " (procedure 1), " << -x1 << " (procedure 2)\n";
   }
   h5.attribute("/", "bands", B);
   h5.attribute("/", "beads", N);

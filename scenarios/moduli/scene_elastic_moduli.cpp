@@ -64,9 +64,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   for (const PrepVariant& v : s.variants)
     names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
                     (v.tag.empty() ? "" : "_" + v.tag));
-  const StudyDeal deal = s.start_from.empty()
-                             ? deal_study_units(parts, names, fingerprint, opts.resume)
-                             : StudyDeal{};
+  const StudyDeal deal =
+      s.start_from.empty() ? deal_study_units(parts, names, fingerprint, opts.resume) : StudyDeal{};
   std::vector<std::string> ran, configs_written;
   with_contact_model(s.contact, [&](const auto& model) {
     using Model = std::decay_t<decltype(model)>;
