@@ -8,6 +8,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "core/ensemble.hpp"
 #include "core/error.hpp"
 
 namespace granular {
@@ -112,7 +113,10 @@ std::string parameter_fingerprint(const std::string& text) {
 
 std::string open_study_checkpoints(const std::string& out_dir, bool resume) {
   const std::string parts = out_dir + "/variants";
-  if (!resume && std::filesystem::exists(parts) && !std::filesystem::is_empty(parts))
+  // Rank 0 alone judges the folder: on a shared file system another rank may already be
+  // writing its first stage checkpoint there when a slower one gets here.
+  if (ensemble::root() && !resume && std::filesystem::exists(parts) &&
+      !std::filesystem::is_empty(parts))
     throw InputError(parts + " holds checkpoints of an unfinished study: continue it with " +
                      "--resume, or remove that directory (or choose another --out) to start over");
   make_directories(parts);
