@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Checks of a run spread over MPI ranks against the same run in one process (ctest drives
 it; see tests/CMakeLists.txt). Usage:
-  ensemble_test.py GRANULAR same SCENE RANKS      R ranks give the files of one process
+  ensemble_test.py GRANULAR same SCENE RANKS [T]  R ranks give the files of one process
+                                                  (of T threads; default 1)
   ensemble_test.py GRANULAR resume SCENE R1 R2    stopped on R1 ranks, resumed on R2
   ensemble_test.py GRANULAR fail SCENE            a failing rank stops every rank, no hang
   ensemble_test.py GRANULAR detects SCENE         the comparison sees another seed's run
@@ -60,7 +61,8 @@ def main():
     try:
         one = work / "one"
         if check in ("same", "resume", "detects"):
-            rc, log = run(granular, scene, one)
+            threads = int(sys.argv[5]) if check == "same" and len(sys.argv) > 5 else 1
+            rc, log = run(granular, scene, one, threads=threads)
             must(rc == 0, "the run in one process", log)
         if check == "same":
             ranks = int(sys.argv[4])
