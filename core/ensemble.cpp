@@ -26,9 +26,9 @@ namespace ensemble {
 
 namespace {
 int g_rank = 0, g_size = 1;
-bool g_mpi = false;  // MPI_Init was called
 
 #ifdef GRANULAR_HAVE_MPI
+bool g_mpi = false;  // MPI_Init was called
 constexpr std::size_t kChunk = std::size_t(1) << 30;
 
 void send_bytes(const std::string& b, int to) {
@@ -50,7 +50,6 @@ std::string receive_bytes(int from) {
   }
   return b;
 }
-#endif
 
 // Launchers announce themselves in the environment (Open MPI, PMIx, MPICH's Hydra, Slurm's
 // PMI): only then is MPI initialized, so a plain run never starts MPI's runtime.
@@ -59,6 +58,8 @@ bool launched_by_mpi() {
     if (std::getenv(v)) return true;
   return false;
 }
+#endif
+
 }  // namespace
 
 bool built_with_mpi() {
@@ -79,16 +80,14 @@ void initialize(int* argc, char*** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &g_size);
 #else
   (void)argc, (void)argv;
-  if (launched_by_mpi() && (std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMI_SIZE"))) {
-    const char* n = std::getenv("OMPI_COMM_WORLD_SIZE");
-    if (!n) n = std::getenv("PMI_SIZE");
-    if (n && std::atoi(n) > 1) {
-      std::cerr << "error: started by an MPI launcher with " << n
-                << " ranks, but this build has no MPI: every rank would run the whole scene "
-                   "and write the same files. Install OpenMPI (scripts/setup.sh does by "
-                   "default) and build again, or run without mpirun\n";
-      std::exit(2);
-    }
+  const char* n = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (!n) n = std::getenv("PMI_SIZE");
+  if (n && std::atoi(n) > 1) {
+    std::cerr << "error: started by an MPI launcher with " << n
+              << " ranks, but this build has no MPI: every rank would run the whole scene "
+                 "and write the same files. Install OpenMPI (scripts/setup.sh does by "
+                 "default) and build again, or run without mpirun\n";
+    std::exit(2);
   }
 #endif
 }

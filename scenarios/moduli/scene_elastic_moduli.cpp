@@ -163,18 +163,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     }
   });
 
-  if (spread && s.start_from.empty()) {
-    collect_study_files(parts, ran, configs_written);
-    stopped = ensemble::any(stopped);
-    if (!ensemble::root()) return;
-    if (!stopped)
-      for (const std::string& name : names) {
-        Outputs part;
-        if (!load_moduli_part(parts, name, fingerprint, part))
-          throw std::runtime_error(parts + "/" + name + ": a finished variant's part is missing");
-        out.append(part);
-      }
-  }
+  if (spread && s.start_from.empty())
+    stopped = gather_study_units(parts, names, ran, configs_written, fingerprint, stopped, out);
   if (!ensemble::root()) return;
   if (stopped) return;  // the checkpoints in variants/ are the output so far
   H5Writer h5(opts.out_dir + "/results.h5");

@@ -1,6 +1,7 @@
 #include "scenarios/moduli/study_units.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 
 #include "core/ensemble.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
@@ -42,6 +43,21 @@ void collect_study_files(const std::string& parts, const std::vector<std::string
         }
     }
   ensemble::collect_files(files);
+}
+
+bool gather_study_units(const std::string& parts, const std::vector<std::string>& names,
+                        const std::vector<std::string>& ran, const std::vector<std::string>& extra,
+                        const std::string& fingerprint, bool stopped, ModuliOutputs& out) {
+  collect_study_files(parts, ran, extra);
+  stopped = ensemble::any(stopped);
+  if (ensemble::root() && !stopped)
+    for (const std::string& name : names) {
+      ModuliOutputs part;
+      if (!load_moduli_part(parts, name, fingerprint, part))
+        throw std::runtime_error(parts + "/" + name + ": a finished unit's part is missing");
+      out.append(part);
+    }
+  return stopped;
 }
 
 }  // namespace granular

@@ -26,4 +26,13 @@ StudyDeal deal_study_units(const std::string& parts, const std::vector<std::stri
 void collect_study_files(const std::string& parts, const std::vector<std::string>& unit_names,
                          const std::vector<std::string>& extra);
 
+struct ModuliOutputs;
+
+// Collective, over several ranks, after each rank ran its units: collect_study_files, then
+// whether any rank `stopped`; on rank 0, when none did, every unit's part read back in unit
+// order into `out`. Returns whether the study stopped (on every rank).
+bool gather_study_units(const std::string& parts, const std::vector<std::string>& names,
+                        const std::vector<std::string>& ran, const std::vector<std::string>& extra,
+                        const std::string& fingerprint, bool stopped, ModuliOutputs& out);
+
 }  // namespace granular

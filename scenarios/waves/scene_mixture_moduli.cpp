@@ -407,19 +407,8 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
     ran.push_back(name);
     if (!spread) out.append(part);
   }
-  if (spread) {
-    collect_study_files(parts, ran, {});
-    stopped = ensemble::any(stopped);
-    if (!ensemble::root()) return;
-    if (!stopped)
-      for (const std::string& name : names) {
-        ModuliOutputs part;
-        if (!load_moduli_part(parts, name, fingerprint, part))
-          throw std::runtime_error(parts + "/" + name + ": a finished mixture's part is missing");
-        out.append(part);
-      }
-  }
-  if (stopped) return;  // the checkpoints in variants/ are the output so far
+  if (spread) stopped = gather_study_units(parts, names, ran, {}, fingerprint, stopped, out);
+  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
   progress.finish();
 
   // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its jammed configurations.
