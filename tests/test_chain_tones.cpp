@@ -76,8 +76,8 @@ TEST(ChainTones, OrderedChainStandingWaveFollowsTheEigenmodeInClosedForm) {
       const double exact = 1e-4 * std::sin(k * (p + 1)) * std::cos(omega * t[s]);
       worst = std::max(worst, std::abs(u[p * T + s] - exact));
     }
-  // Hertz nonlinearity at u0 = 1e-4 and Verlet's O(dt^2) phase error: far below 1 % of u0.
-  EXPECT_LT(worst, 2e-3 * 1e-4);
+  // Hertz nonlinearity at u0 = 1e-4 and Verlet's O(dt^2) phase error: 3e-5 of u0 measured.
+  EXPECT_LT(worst, 2e-4 * 1e-4);
   EXPECT_GT(t.back(), 2 * M_PI / omega);  // at least one full period was compared
 }
 
@@ -88,7 +88,7 @@ TEST(ChainTones, OrderedChainKeepsTheToneInItsBandAndDisorderSpreadsIt) {
   const std::vector<double> ordered = h5.reals("/xi_0/tone_20_u0_0.0001/bands_mean");
   const std::vector<double> disordered = h5.reals("/xi_1/tone_20_u0_0.0001/bands_mean");
   for (int s = 0; s < T; ++s) EXPECT_GT(ordered[band * T + s], 1 - 1e-6) << "sample " << s;
-  EXPECT_LT(disordered[band * T + T - 1], 0.9);  // xi = 0.3 moves energy out of the band
+  EXPECT_LT(disordered[band * T + T - 1], 0.6);  // xi = 0.3 moves energy out (0.42 left)
   for (int s = 0; s < T; ++s) {
     double sum = 0;
     for (int r = 0; r < B; ++r) sum += disordered[r * T + s];
@@ -116,7 +116,7 @@ TEST(ChainTones, AmplitudesDifferOnlyInAmplitudeAndEnergyIsKeptToVerletOrder) {
     const auto b1 = h5.reals(g + "0.001/bands_mean"), b2 = h5.reals(g + "0.0001/bands_mean");
     double worst = 0;
     for (size_t i = 0; i < b1.size(); ++i) worst = std::max(worst, std::abs(b1[i] - b2[i]));
-    EXPECT_LT(worst, 0.01) << xi;  // the nonlinearity is O(u0): the linear regime
+    EXPECT_LT(worst, 1e-4) << xi;  // the nonlinearity is O(u0): 2e-5 measured at xi = 0.3
   }
 }
 
