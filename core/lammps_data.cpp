@@ -53,9 +53,13 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
       continue;
     }
     if (section.empty()) {  // header
-      double a, b;
-      std::string w1, w2;
-      if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
+      double a, b, c;
+      std::string w1, w2, w3;
+      std::istringstream tt(s);
+      if ((tt >> a >> b >> c >> w1 >> w2 >> w3) && w1 == "xy" && w2 == "xz" && w3 == "yz") {
+        out.tilt[0] = a * length_scale, out.tilt[1] = b * length_scale;
+        out.tilt[2] = c * length_scale;
+      } else if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
         ss >> natoms;
       } else if (s.find("atom types") != std::string::npos) {
         if (!(ss >> out.atom_types) || out.atom_types < 1)
@@ -100,7 +104,9 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
   h.resize(static_cast<int>(natoms));
   int i = 0;
   const double vscale = length_scale / time_scale;
+  out.ids.reserve(atoms.size());
   for (const auto& [id, a] : atoms) {  // std::map: ascending id
+    out.ids.push_back(id);
     h.species[i] = static_cast<int>(a[0]) - 1;
     h.radius[i] = 0.5 * a[1] * length_scale;
     h.density[i] = a[2] * (mass_scale / (length_scale * length_scale * length_scale));
@@ -109,6 +115,9 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     if (it != vels.end()) {
       h.vx[i] = it->second[0] * vscale, h.vy[i] = it->second[1] * vscale,
       h.vz[i] = it->second[2] * vscale;
+      if (it->second.size() >= 6)
+        h.wx[i] = it->second[3] / time_scale, h.wy[i] = it->second[4] / time_scale,
+        h.wz[i] = it->second[5] / time_scale;
     }
     ++i;
   }

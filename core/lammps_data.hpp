@@ -4,10 +4,12 @@
 // (mm, us, ug), sorts particles by id and unwraps nothing: positions are wrapped later.
 // Atom type t becomes species t - 1, which must exist in the pair tables: 1 <= t <=
 // min(atom types, kLammpsMaxTypes). Every malformed input is an InputError naming the file.
-// Angular velocities (the last three Velocities columns) are read but not stored: the
-// host description carries no spin.
+// Angular velocities (the last three Velocities columns) are kept in the particles' spins.
+// A triclinic box (the `xy xz yz` header line) is read into `tilt`; the engine's own DEM box
+// is cuboid, so its readers refuse it (the LAMMPS force reference takes it).
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/host_particles.hpp"
 
@@ -20,7 +22,10 @@ constexpr int kLammpsMaxTypes = 4;
 struct LammpsData {
   HostParticles particles;
   double lo[3] = {0, 0, 0}, len[3] = {1, 1, 1};  // periodic box
+  double tilt[3] = {0, 0, 0};                    // xy, xz, yz (zero: orthogonal box)
+  std::vector<long> ids;                         // atom ids, ascending (particle order)
   int atom_types = 1;
+  bool triclinic() const { return tilt[0] != 0 || tilt[1] != 0 || tilt[2] != 0; }
 };
 
 // `length_scale` multiplies lengths (1e3: metres to millimetres), `time_scale` times

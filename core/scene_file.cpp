@@ -188,6 +188,26 @@ std::vector<double> SceneFile::reals(const std::string& key) const {
   return out;
 }
 
+std::vector<std::string> SceneFile::texts(const std::string& key) const {
+  const toml::node* n = as_node(find(key));
+  if (!n) fail(key, "is missing (an array of strings is required)");
+  const toml::array* a = n->as_array();
+  if (!a) fail(key, "must be an array of strings");
+  std::vector<std::string> out;
+  std::string text = "[";
+  for (const auto& e : *a) {
+    auto v = e.value_exact<std::string>();
+    if (!v) fail(key, "must contain only strings");
+    out.push_back(*v);
+    std::string quoted;
+    for (char c : *v) quoted += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    text += (out.size() > 1 ? ", \"" : "\"") + quoted + "\"";
+  }
+  if (out.empty()) fail(key, "must not be empty");
+  note(key, text + "]");
+  return out;
+}
+
 double SceneFile::real(const std::string& key, double def) const {
   if (find(key)) return real(key);
   note(key, format_real(def));

@@ -30,6 +30,8 @@ class SceneFile {
   std::string text(const std::string& key) const;
   bool flag(const std::string& key) const;
   std::vector<double> reals(const std::string& key) const;
+  // A non-empty array of strings.
+  std::vector<std::string> texts(const std::string& key) const;
 
   // Optional values with defaults (the default is recorded as the value used).
   double real(const std::string& key, double def) const;

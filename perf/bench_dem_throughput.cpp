@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "core/lammps_data.hpp"
 #include "core/output.hpp"
 #include "dense_packing.hpp"
@@ -151,6 +152,8 @@ int main(int argc, char** argv) {
           std::string source;
           if (!data.empty()) {
             LammpsData d = read_lammps_data(data);
+            if (d.triclinic())
+              throw InputError(data + ": triclinic box (xy xz yz); the DEM box is cuboid");
             host = d.particles;
             for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
             source = data;

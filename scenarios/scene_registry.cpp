@@ -33,6 +33,10 @@ const std::vector<SceneEntry>& scene_registry() {
       {"continuum_fit",
        "hypoelastic continuum law fitted to the moduli studies, checked on DEM paths",
        run_continuum_fit},
+      // LAMMPS decks
+      {"lammps_forces",
+       "forces, torques and pair virial of LAMMPS' granular pair styles on a LAMMPS data file",
+       run_lammps_forces},
       // signals and waves
       {"signal_analysis",
        "travel-time pickers, first-event spectra and spectral-ratio Q of recorded traces",

@@ -63,6 +63,8 @@ void check_continuum_fit(const SceneFile&);
 // signals and waves
 void run_signal_analysis(const SceneFile&, const RunOptions&);
 void run_wave_transmission(const SceneFile&, const RunOptions&);
+// LAMMPS decks: forces of LAMMPS' granular pair styles on a LAMMPS data file
+void run_lammps_forces(const SceneFile&, const RunOptions&);
 // chain scenes
 void run_chain_impulse(const SceneFile&, const RunOptions&);
 void run_chain_master_equation(const SceneFile&, const RunOptions&);

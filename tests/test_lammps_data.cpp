@@ -183,3 +183,21 @@ TEST(LammpsData, MalformedFilesAreInputErrorsNamingTheFile) {
     EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
   }
 }
+
+TEST(LammpsData, TiltLineIdsAndSpinsAreKept) {
+  std::string text = kGood;
+  text.insert(text.find("Atoms"), "0.0004 -0.0002 0.0001 xy xz yz\n\n");
+  text.replace(text.find("1 0.1 0.2 -0.3 0 0 0"), 20, "1 0.1 0.2 -0.3 5 -6 7");
+  const std::string path = write_file("triclinic", text);
+  const LammpsData d = read_lammps_data(path, 1.0, 1e6, 1.0);  // spins in 1/us
+  std::remove(path.c_str());
+  ASSERT_TRUE(d.triclinic());
+  EXPECT_EQ(d.tilt[0], 0.0004);
+  EXPECT_EQ(d.tilt[1], -0.0002);
+  EXPECT_EQ(d.tilt[2], 0.0001);
+  EXPECT_EQ(d.ids, (std::vector<long>{1, 2, 3}));
+  expect_rel(d.particles.wx[0], 5e-6, "spin x");
+  expect_rel(d.particles.wy[0], -6e-6, "spin y");
+  expect_rel(d.particles.wz[0], 7e-6, "spin z");
+  EXPECT_EQ(d.particles.wx[1], 0.0);  // atom 2 has no Velocities line
+}
