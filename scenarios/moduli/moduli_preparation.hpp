@@ -58,6 +58,12 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
   std::optional<System> sys;
   sys.emplace(Particles<Exec>::from_host(host), box, model, s.params);
   double rate_now = s.rate;
+  double direction_now = 1;  // +1 compression, -1 decompression (the unloading branch)
+  // P* = P dbar / k_n where k_n is a constant of the law (linear; hysteretic: k_2); a Hertz
+  // stiffness depends on the overlaps, so its series keeps P only (P* is NaN).
+  const double kn_fixed = s.contact.normal == "linear"       ? s.contact.linear.kn
+                          : s.contact.normal == "hysteretic" ? s.contact.hysteretic.k2
+                                                             : kNaN;
   // Volumetric rate for the target inertial number, within [min_rate, rate].
   auto rate_of = [&](const Measurements& m) {
     double r = s.rate;
@@ -73,15 +79,23 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     out.prep["inertial_number"].push_back(
         m.pressure > 0 ? rate_now * dbar * std::sqrt(gas.density / m.pressure) : kNaN);
     out.prep["variant"].push_back(static_cast<double>(&v - s.variants.data()));
+    out.prep["direction"].push_back(direction_now);
+    out.prep["pressure_star"].push_back(m.pressure * dbar / kn_fixed);
+    out.prep["ekin_over_epot"].push_back(m.epot > 0 ? m.ekin / m.epot : kNaN);
+    for (int k = 0; k < 7; ++k)
+      out.prep[k < 6 ? "contact_fraction_" + std::to_string(k) : "contact_fraction_6_or_more"]
+          .push_back(m.contact_histogram[k]);
   };
   auto strain = [&](double target, double sign) {
-    rate_now = s.rate;  // what the recorded series and I report (rate_of lowers it if adaptive)
+    rate_now = s.rate;      // what the recorded series and I report (rate_of lowers it if adaptive)
+    direction_now = -sign;  // a negative strain compresses
     std::function<double(const Measurements&)> f = nullptr;
     if (s.prep_inertial > 0) f = [&, sign](const Measurements& m) { return sign * rate_of(m) / 3; };
     strain_to_phi(*sys, target, sign * s.rate / 3, 500, sample, f);
   };
   auto compress_gas = [&](double target) {
     rate_now = s.gas_rate;
+    direction_now = 1;
     strain_to_phi(*sys, target, -s.gas_rate / 3, 500, sample);
   };
   auto save = [&] {

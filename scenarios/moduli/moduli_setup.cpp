@@ -25,6 +25,10 @@ Setup read_setup(const SceneFile& scene) {
   scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
+  s.jamming_p_max =
+      scene.real("preparation.jamming_fit_pressure_max", s.contact.normal == "hertz" ? 0.0 : 1e-3);
+  scene.require(s.jamming_p_max >= 0, "preparation.jamming_fit_pressure_max",
+                "must not be negative (0: no fit)");
   s.amplitude = scene.real("probe.amplitude", 3e-6);
   s.strain_steps = scene.integer("probe.strain_steps", 2000);
   s.probe_relax = scene.integer("probe.relax_steps", 2000);

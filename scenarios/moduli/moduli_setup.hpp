@@ -37,6 +37,9 @@ struct Setup {
   std::vector<double> targets;
   double relax_ratio = 1e-8;
   long relax_max = 200000;
+  // Jamming density fit on the unloading branch: samples with 0 < P <= this (P* for laws of
+  // constant stiffness, P for Hertz; 0: no fit, only the bracketing densities).
+  double jamming_p_max = 1e-3;
   double amplitude = 3e-6, probe_inertial = 0;
   long strain_steps = 2000, probe_relax = 2000, max_strain_steps = 200000;
   bool keep_friction = false, halving = false;

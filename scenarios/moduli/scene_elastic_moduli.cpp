@@ -28,6 +28,7 @@
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/moduli/jamming_point.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_preparation.hpp"
 #include "scenarios/moduli/moduli_probing.hpp"
@@ -179,6 +180,35 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       "relaxed configurations written by this run under its output directory (configs/); "
       "they are not part of committed reference outputs: the same command regenerates them";
   summary["table"] = out.rows;
+  if (!s.loading_branch) {
+    // Jamming density per preparation variant from its unloading series.
+    const bool hertz = s.contact.normal == "hertz";
+    Json jam = Json::array();
+    for (const JammingPoint& j :
+         jamming_points(out.prep, hertz ? "pressure" : "pressure_star", hertz ? 1.5 : 1.0,
+                        s.jamming_p_max > 0 ? s.jamming_p_max : -1)) {
+      Json e = Json::object();
+      const PrepVariant& v = s.variants.at(j.variant);
+      e["variant"] = j.variant;
+      if (!v.tag.empty()) e["tag"] = v.tag;
+      e["mu_preparation"] = std::isnan(v.mu) ? Json() : Json(v.mu);
+      e["particles"] = v.count;
+      e["fit_points"] = j.points;
+      e["phi_J"] = std::isnan(j.phi_j) ? Json() : Json(j.phi_j);
+      e["phi_J_stderr"] = std::isnan(j.phi_j_stderr) ? Json() : Json(j.phi_j_stderr);
+      e["phi_lowest_jammed"] = std::isnan(j.phi_lowest_jammed) ? Json() : Json(j.phi_lowest_jammed);
+      e["phi_highest_unjammed"] =
+          std::isnan(j.phi_highest_unjammed) ? Json() : Json(j.phi_highest_unjammed);
+      jam.push(e);
+    }
+    summary["jamming"] = jam;
+    summary["jamming_note"] =
+        "phi_J: root of the straight line P^(1/alpha) against phi (alpha = 1 linear, 3/2 Hertz) "
+        "fitted to the unloading samples with 0 < P <= preparation.jamming_fit_pressure_max; "
+        "phi_lowest_jammed / phi_highest_unjammed: the lowest density of the unloading branch "
+        "that still has a contact network and the highest that has none (they overlap where "
+        "the network flickers near jamming; bounded by the lowest target)";
+  }
   if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
   if (s.halving) {
     // Largest relative change of K, G, M over all configurations when the probing

@@ -13,6 +13,7 @@ from chartkit import plt, save
 h5, outdir = sys.argv[1], sys.argv[2]
 with h5py.File(h5, "r") as f:
     t = {k: f["table"][k][:] for k in f["table"]}
+    prep = {k: f["preparation"][k][:] for k in f["preparation"]} if "preparation" in f else {}
     sweeps = {}
     if "sweep" in f:
         for name in f["sweep"]:
@@ -31,13 +32,20 @@ def groups(t):
 series = groups(t)
 
 
-def study_title():
-    """Contact law, N and branch from the run's summary.json (beside results.h5)."""
+def study_parameters():
+    """The parameters of the run's summary.json (beside results.h5), {} if absent."""
     path = os.path.join(os.path.dirname(os.path.abspath(h5)), "summary.json")
     try:
         with open(path) as f:
-            par = json.load(f).get("parameters", {})
+            return json.load(f).get("parameters", {})
     except (OSError, ValueError):
+        return {}
+
+
+def study_title():
+    """Contact law, N and branch from the run's summary.json."""
+    par = study_parameters()
+    if not par:
         return None
     law = par.get("contact.normal", "linear")
     counts = par.get("ensemble.counts") or []
@@ -182,3 +190,133 @@ if len(sizes) > 1 and "phi_target" in t:
     ax.set_ylabel("relative scatter over seeds (std / mean)")
     ax.legend(fontsize=7)
     save(fig, outdir, "scatter_vs_size.png")
+
+# Probing tangential stiffness (probe.kt_over_kn lists): the gain of K* and G* over the
+# frictionless probe of the same configuration against k_t/k_n, and G split into its normal
+# and tangential contact parts against phi Z, each with the fluctuation theory's partition:
+# G_N^FT = (3/5) K^FT (K^FT has no tangential part), G_T^FT = G^FT - G_N^FT, linear in k_t/k_n.
+ratios = sorted(set(t["kt_kn"][jammed]))
+if len(ratios) > 2 and 0.0 in ratios:
+    cfg = np.round(t["phi"], 6) * 1e6 + np.nan_to_num(t["mu_preparation"], nan=-1) * 1e3 + t["seed"]
+    base = {c: i for i, c in enumerate(cfg) if t["kt_kn"][i] == 0 and jammed[i]}
+    phiz = t["phi"] * t["z_corrected"]
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
+    configs = sorted(base, key=lambda c: phiz[base[c]])
+    near = min(configs, key=lambda c: abs(phiz[base[c]] - 4.5))
+    picks = [near] + [c for c in (configs[0], configs[-1]) if c != near]
+    for n, c in enumerate(picks):
+        rows = np.array([i for i in range(len(cfg)) if cfg[i] == c and jammed[i]])
+        rows = rows[np.argsort(t["kt_kn"][rows])]
+        b = base[c]
+        r = t["kt_kn"][rows]
+        lab = "phi Z = %.2f" % phiz[b]
+        axes[0].plot(r, t["K_star"][rows] - t["K_star"][b], "s-", color="C%d" % n, ms=4,
+                     label="dK*, " + lab)
+        axes[0].plot(r, t["G_star"][rows] - t["G_star"][b], "o-", color="C%d" % n, ms=4,
+                     mfc="none", label="dG*, " + lab)
+        axes[0].plot(r, t["G_ft2"][rows] - t["G_ft2"][b], ":", color="C%d" % n, lw=1,
+                     label="dG FT2" if n == 0 else None)
+    axes[0].axhline(0, color="k", lw=0.6)
+    axes[0].set_xlabel("k_t / k_n of the probe")
+    axes[0].set_ylabel("gain over k_t = 0 (same configuration)")
+    axes[0].set_title("tangential stiffness: dK*, dG* (FT: dK = 0)", fontsize=9)
+    axes[0].legend(fontsize=6)
+    for n, r in enumerate(ratios):
+        sel = np.where(jammed & (t["kt_kn"] == r))[0]
+        sel = sel[np.argsort(phiz[sel])]
+        gn_ft = 0.6 * t["K_ft2"][sel]
+        axes[1].plot(phiz[sel], t["G_n_star"][sel], "o", color="C%d" % n, ms=4,
+                     label="kt/kn %g" % r)
+        if r == 0:  # G_N^FT does not depend on k_t/k_n
+            axes[1].plot(phiz[sel], gn_ft, "-", color="k", lw=0.8, label="FT2, any kt/kn")
+        if r > 0:
+            axes[2].plot(phiz[sel], t["G_t_star"][sel], "o", color="C%d" % n, ms=4,
+                         label="kt/kn %g" % r)
+            axes[2].plot(phiz[sel], t["G_ft2"][sel] - gn_ft, "-", color="C%d" % n, lw=0.8)
+    for ax, name in ((axes[1], "G_N* (normal contact forces)"),
+                     (axes[2], "G_T* (tangential contact forces)")):
+        ax.set_xlabel("phi Z")
+        ax.set_ylabel(name)
+        ax.set_title(name.split(" ")[0] + ": markers measured, lines FT2 partition", fontsize=9)
+        ax.legend(fontsize=6)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    save(fig, outdir, "tangential_stiffness.png")
+
+# The preparation path (series recorded along the protocol, written since the series carry
+# a direction): contact-number fractions, Z, P*, E_kin/E_pot and the inertial number against
+# phi, compression solid and decompression dashed, one colour per preparation variant.
+if "direction" in prep and len(prep["phi"]):
+    mus = study_parameters().get("preparation.mu") or []
+    variants = sorted(set(prep["variant"].astype(int)))
+
+    def vlabel(v):
+        return "mu %g" % mus[v] if len(mus) == len(variants) else "variant %d" % v
+
+    hertz = np.all(np.isnan(prep["pressure_star"]))
+    fig, axes = plt.subplots(2, 3, figsize=(14, 7.5))
+    panels = [(axes[0, 0], "z_corrected", "Z (non-rattlers)", False),
+              (axes[0, 1], "pressure" if hertz else "pressure_star",
+               "P" if hertz else "P* = P dbar / k_n", True),
+              (axes[0, 2], "ekin_over_epot", "E_kin / E_pot", True),
+              (axes[1, 0], "inertial_number", "I_v = rate dbar sqrt(rho / P)", True)]
+    for n, v in enumerate(variants):
+        on = prep["variant"].astype(int) == v
+        for ax, key, name, log in panels:
+            for d, ls in ((1, "-"), (-1, "--")):
+                sel = on & (prep["direction"] == d)
+                y = prep[key][sel]
+                ok = np.isfinite(y) & ((y > 0) if log else True)
+                ax.plot(prep["phi"][sel][ok], y[ok], ls, color="C%d" % n, lw=1,
+                        label=vlabel(v) + (" compression" if d > 0 else " decompression"))
+            ax.set_ylabel(name)
+            if log:
+                ax.set_yscale("log")
+    # Contact-number fractions of the first and the last variant.
+    for ax, v in ((axes[1, 1], variants[0]), (axes[1, 2], variants[-1])):
+        on = prep["variant"].astype(int) == v
+        for k in range(7):
+            key = "contact_fraction_%d" % k if k < 6 else "contact_fraction_6_or_more"
+            for d, ls in ((1, "-"), (-1, "--")):
+                sel = on & (prep["direction"] == d)
+                ax.plot(prep["phi"][sel], prep[key][sel], ls, color=plt.cm.viridis(k / 6), lw=1,
+                        label=("%d contacts" % k if k < 6 else ">= 6 contacts") if d > 0 else None)
+        ax.set_ylabel("fraction of particles")
+        ax.set_title(vlabel(v) + " (solid: compression, dashed: decompression)", fontsize=8)
+        ax.legend(fontsize=6, ncol=2)
+    for ax in axes.flat:
+        ax.set_xlabel("phi")
+    axes[0, 0].legend(fontsize=6)
+    if title:
+        fig.suptitle(title + ": preparation path", fontsize=10)
+    save(fig, outdir, "preparation_path.png")
+
+# Jamming density against the preparation friction (summary.json "jamming"): the fitted root
+# of the unloading branch with its standard error, and the lowest density of the branch with
+# a contact network and the highest without (the range where the network flickers).
+def summary_json():
+    path = os.path.join(os.path.dirname(os.path.abspath(h5)), "summary.json")
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}
+
+
+jam = [j for j in summary_json().get("jamming", []) if j.get("mu_preparation") is not None]
+if len(jam) > 1:
+    mu = np.array([j["mu_preparation"] for j in jam], float)
+    val = lambda k: np.array([np.nan if j.get(k) is None else j[k] for j in jam], float)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    x = np.where(mu > 0, mu, np.nan)
+    ax.errorbar(mu, val("phi_J"), yerr=val("phi_J_stderr"), fmt="o-", color="C0", capsize=3,
+                label="phi_J (fit of the unloading branch)")
+    ax.plot(mu, val("phi_lowest_jammed"), "v", color="C1", label="lowest phi with a network (unloading)")
+    ax.plot(mu, val("phi_highest_unjammed"), "^", color="C2", label="highest phi without one")
+    ax.set_xscale("symlog", linthresh=0.01)
+    ax.set_xlabel("preparation friction mu")
+    ax.set_ylabel("jamming volume fraction")
+    ax.legend(fontsize=7)
+    if title:
+        ax.set_title(title, fontsize=9)
+    save(fig, outdir, "jamming_vs_friction.png")
