@@ -8,7 +8,9 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <type_traits>
 
+#include "kernels/contact_hysteretic.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
@@ -25,6 +27,16 @@ Model with_friction(Model m, double mu) {
   if constexpr (Model::tangential_type::active) {
     for (auto& row : m.tangential.table.p)
       for (auto& q : row) q.mu_s = q.mu_d = mu;
+  }
+  return m;
+}
+
+// The same contact model with another adhesive stiffness k_c (hysteretic normal law only).
+template <class Model>
+Model with_cohesion(Model m, double kc) {
+  if constexpr (std::is_same_v<typename Model::normal_type, HystereticNormal>) {
+    for (auto& row : m.normal.table.p)
+      for (auto& q : row) q.kc = kc;
   }
   return m;
 }

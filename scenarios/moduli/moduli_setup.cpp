@@ -109,21 +109,34 @@ Setup read_setup(const SceneFile& scene) {
   if (!mus.empty())
     scene.require(s.contact.tangential == "coulomb", "preparation.mu",
                   "needs contact.tangential = \"coulomb\"");
+  // Cohesion list: one preparation per k_c of the hysteretic law (K and G against k_c, the
+  // preparation path with and without cohesion).
+  const std::vector<double> kcs = scene.reals("preparation.kc", {});
+  for (double k : kcs) scene.require(k >= 0, "preparation.kc", "must not be negative");
+  if (!kcs.empty())
+    scene.require(s.contact.normal == "hysteretic", "preparation.kc",
+                  "needs contact.normal = \"hysteretic\" (k_c is its adhesive stiffness)");
   const std::vector<double> mu_list = mus.empty() ? std::vector<double>{kNaN} : mus;
+  const std::vector<double> kc_list = kcs.empty() ? std::vector<double>{kNaN} : kcs;
   for (double c : counts)
     for (double sd : seeds)
-      for (double mu : mu_list) {
-        PrepVariant v;
-        v.count = static_cast<int>(c), v.seed = static_cast<std::uint64_t>(sd), v.mu = mu;
-        char buf[96] = "";
-        if (counts.size() > 1 || seeds.size() > 1)
-          std::snprintf(buf, sizeof buf, "N%d_seed%d", v.count, static_cast<int>(sd));
-        if (mus.size() > 1)
-          std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), "%smu%g",
-                        buf[0] ? "_" : "", mu);
-        v.tag = buf;
-        s.variants.push_back(v);
-      }
+      for (double mu : mu_list)
+        for (double kc : kc_list) {
+          PrepVariant v;
+          v.count = static_cast<int>(c), v.seed = static_cast<std::uint64_t>(sd), v.mu = mu;
+          v.kc = kc;
+          char buf[128] = "";
+          if (counts.size() > 1 || seeds.size() > 1)
+            std::snprintf(buf, sizeof buf, "N%d_seed%d", v.count, static_cast<int>(sd));
+          if (mus.size() > 1)
+            std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), "%smu%g",
+                          buf[0] ? "_" : "", mu);
+          if (kcs.size() > 1)
+            std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), "%skc%g",
+                          buf[0] ? "_" : "", kc);
+          v.tag = buf;
+          s.variants.push_back(v);
+        }
   scene.reject_unknown_keys();
   return s;
 }

@@ -23,6 +23,7 @@ struct PrepVariant {
   int count = 0;
   std::uint64_t seed = 1;
   double mu = kNaN;  // preparation friction (NaN: as in [contact])
+  double kc = kNaN;  // adhesive stiffness of the hysteretic law (NaN: as in [contact])
   std::string tag;   // subdirectory of configs/ and label in the table ("" if only one)
 };
 

@@ -122,7 +122,11 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         return;
       }
       ++prepared;
-      const Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
+      Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
+      if (!std::isnan(v.kc)) prep = with_cohesion(prep, v.kc);
+      const double kc = std::isnan(v.kc)
+                            ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0)
+                            : v.kc;
       const double mu = std::isnan(v.mu)
                             ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
                             : v.mu;
@@ -144,6 +148,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                                       part.add_config(dir + name);
                                       analyse(s, c, prep,
                                               {{"mu_preparation", mu},
+                                               {"kc_preparation", kc},
                                                {"seed", static_cast<double>(v.seed)},
                                                {"ekin_over_epot", ratio},
                                                {"inertial_number_preparation", I},
@@ -192,6 +197,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       e["variant"] = j.variant;
       if (!v.tag.empty()) e["tag"] = v.tag;
       e["mu_preparation"] = std::isnan(v.mu) ? Json() : Json(v.mu);
+      if (!std::isnan(v.kc)) e["kc_preparation"] = v.kc;
       e["particles"] = v.count;
       e["fit_points"] = j.points;
       e["phi_J"] = std::isnan(j.phi_j) ? Json() : Json(j.phi_j);

@@ -22,7 +22,9 @@ with h5py.File(h5, "r") as f:
 
 def groups(t):
     """Rows with the same preparation friction, stiffness ratio and size form one series."""
-    keys = np.stack([np.nan_to_num(t["mu_preparation"], nan=-1), t["kt_kn"], t["particles"]], 1)
+    kc = t["kc_preparation"] if "kc_preparation" in t else np.zeros_like(t["kt_kn"])
+    keys = np.stack([np.nan_to_num(t["mu_preparation"], nan=-1), t["kt_kn"], t["particles"], kc],
+                    1)
     out = {}
     for i, k in enumerate(map(tuple, keys)):
         out.setdefault(k, []).append(i)
@@ -68,6 +70,8 @@ def label_of(key):
         label.append("kt/kn %g" % key[1])
     if len({k[2] for k in series}) > 1:
         label.append("N %d" % key[2])
+    if len({k[3] for k in series}) > 1:
+        label.append("kc %g" % key[3])
     return ", ".join(label) or "simulation"
 
 
@@ -304,7 +308,7 @@ def summary_json():
 
 
 jam = [j for j in summary_json().get("jamming", []) if j.get("mu_preparation") is not None]
-if len(jam) > 1:
+if len({j["mu_preparation"] for j in jam}) > 1:
     mu = np.array([j["mu_preparation"] for j in jam], float)
     val = lambda k: np.array([np.nan if j.get(k) is None else j[k] for j in jam], float)
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -320,3 +324,26 @@ if len(jam) > 1:
     if title:
         ax.set_title(title, fontsize=9)
     save(fig, outdir, "jamming_vs_friction.png")
+
+# Cohesion list (preparation.kc): K* and G* against k_c at each target, to see how little the
+# adhesive stiffness moves the elastic plateau.
+if "kc_preparation" in t and len(set(t["kc_preparation"])) > 1:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    targets = sorted(set(t["phi_target"]))
+    k2 = t["kn_mean"]
+    for n, phi in enumerate(targets):
+        sel = np.where(jammed & (t["phi_target"] == phi) & (t["kt_kn"] == t["kt_kn"][0]))[0]
+        sel = sel[np.argsort(t["kc_preparation"][sel])]
+        if len(sel) == 0:
+            continue
+        for ax, m in zip(axes, ("K", "G")):
+            ax.plot(t["kc_preparation"][sel] / k2[sel], t[m + "_star"][sel], "o-",
+                    color="C%d" % n, ms=4, label="phi %.3f" % phi)
+    for ax, m in zip(axes, ("K", "G")):
+        ax.set_xscale("symlog", linthresh=0.1)
+        ax.set_xlabel("k_c / k_2 of the preparation (and the probe)")
+        ax.set_ylabel(m + "* = " + m + " dbar / k_2")
+        ax.legend(fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    save(fig, outdir, "moduli_vs_cohesion.png")
