@@ -200,7 +200,9 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
   std::map<std::string, std::vector<double>> sw;
   ReferenceRuns<DemSystem<Exec, Model>> references;
   for (double a : s.amplitudes) {
-    const long n = steps_for(s, a, base_rate);
+    // At the base rate (smaller amplitudes take fewer steps), or in the base probe's number of
+    // steps (the rate scales with the amplitude: 100 times smaller amplitude and rate).
+    const long n = s.sweep_same_steps ? steps : steps_for(s, a, base_rate);
     double reversal = 0;
     const Moduli mod = probe_config(c, probe_base, s, a, n, &reversal, &references);
     const double vals[] = {a,

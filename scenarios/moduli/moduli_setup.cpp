@@ -41,6 +41,7 @@ Setup read_setup(const SceneFile& scene) {
                 "must be 1 (shear in xy, uniaxial along x) or 3 (all planes and axes, averaged)");
   s.kt_ratios = scene.reals("probe.kt_over_kn", {});
   s.amplitudes = scene.reals("probe.amplitudes", {});
+  s.sweep_same_steps = scene.flag("probe.amplitudes_same_steps", false);
   scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
   scene.require(s.strain_steps > 0 && s.probe_relax >= 0, "probe.strain_steps",
                 "and probe.relax_steps must be positive");

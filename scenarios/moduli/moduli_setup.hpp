@@ -50,6 +50,7 @@ struct Setup {
   long stop_after_variants = 0, stop_after_stages = 0;
   std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
   std::vector<double> amplitudes;  // amplitude sweep (empty: none)
+  bool sweep_same_steps = false;   // sweep in the base probe's steps instead of at its rate
 };
 
 // Reads every key of the scene (unknown keys are refused) and checks their ranges.
