@@ -162,6 +162,48 @@ inline Moduli moduli_from(const ModeResult& iso, const ModeResult& shear, const 
 
 const std::array<double, 3> kIsotropic = {1, 1, 1}, kPureShear = {1, -1, 0}, kUniaxial = {1, 0, 0};
 
+// Reversibility of a pre-strain: from a state relaxed to E_kin/E_pot < relax_ratio, strain
+// by `prestrain` along `pattern` (kIsotropic or kPureShear) and relax; reverse by `amplitude`
+// (the unloading modulus), then by the rest of the pre-strain (the stress left behind). The
+// moduli are in the mode's own measure: K = dp / (volumetric strain) for the isotropic mode,
+// G = d(s_xx - s_yy) / (2 (e_x - e_y)) for pure shear.
+struct Reversibility {
+  double loading = 0;        // secant modulus over the pre-strain
+  double unloading = 0;      // modulus over the first `amplitude` of the reversal
+  double residual = 0;       // stress left after the whole reversal / stress the pre-strain added
+  double relaxed_ratio = 0;  // E_kin/E_pot reached before the pre-strain
+};
+
+template <class System>
+Reversibility probe_reversibility(System& sys, const std::array<double, 3>& pattern,
+                                  double prestrain, double amplitude, long prestrain_steps,
+                                  long amplitude_steps, long relax_steps, double relax_ratio,
+                                  long relax_max) {
+  const bool iso = pattern == kIsotropic;
+  auto stress = [iso](const Measurements& m) {
+    return iso ? m.pressure : m.stress[0] - m.stress[1];
+  };
+  auto strain = [iso](const PeriodicBox& from, const PeriodicBox& to) {
+    double e[3];
+    for (int d = 0; d < 3; ++d) e[d] = -std::log(to.len[d] / from.len[d]);
+    return iso ? e[0] + e[1] + e[2] : 2 * (e[0] - e[1]);
+  };
+  Reversibility r;
+  r.relaxed_ratio = relax(sys, relax_ratio, relax_max);
+  const PeriodicBox box0 = sys.box();
+  const Measurements m0 = sys.measure();
+  probe_strain(sys, pattern, +1, prestrain, prestrain_steps, relax_steps);
+  const PeriodicBox box1 = sys.box();
+  const Measurements m1 = sys.measure();
+  probe_strain(sys, pattern, -1, amplitude, amplitude_steps, relax_steps);
+  const Measurements m2 = sys.measure();
+  r.loading = (stress(m1) - stress(m0)) / strain(box0, box1);
+  r.unloading = (stress(m2) - stress(m1)) / strain(box1, sys.box());
+  probe_strain(sys, pattern, -1, prestrain - amplitude, prestrain_steps, relax_steps);
+  r.residual = (stress(sys.measure()) - stress(m0)) / (stress(m1) - stress(m0));
+  return r;
+}
+
 // Probes a relaxed system in place, keeping its contact history: for each mode (isotropic,
 // pure shear compressing x and stretching y, uniaxial along x) strain by `amplitude`
 // (compressive true strain) in `strain_steps` steps, relax `relax_steps` at fixed box,

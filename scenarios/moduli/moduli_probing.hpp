@@ -194,6 +194,38 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
       std::cerr << "  rattlers " << m.rattlers << " of " << m.particles
                 << "  (unjammed: no load-bearing contact network, not probed)\n";
   }
+  if (!s.prestrains.empty() && jammed) {
+    // Reversibility: pre-strains of growing size, isotropic and pure shear, each from the
+    // saved state relaxed further, then reversed (see probe_reversibility).
+    std::map<std::string, std::vector<double>> rv;
+    for (int mode = 0; mode < 2; ++mode)
+      for (double e : s.prestrains) {
+        auto sys = restart_system<DemSystem<Exec, Model>>(c, probe_base, s.params);
+        const Reversibility r = probe_reversibility(
+            sys, mode == 0 ? kIsotropic : kPureShear, e, s.amplitude, steps_for(s, e, base_rate),
+            steps, s.probe_relax, s.prestrain_relax_ratio, s.relax_max);
+        const double vals[] = {e,
+                               static_cast<double>(mode),
+                               r.loading * scale,
+                               r.unloading * scale,
+                               r.residual,
+                               r.relaxed_ratio};
+        const char* names[] = {"prestrain",
+                               "mode",
+                               "loading_modulus_star",
+                               "unloading_modulus_star",
+                               "residual",
+                               "relaxed_ekin_over_epot"};
+        for (size_t q = 0; q < std::size(vals); ++q) rv[names[q]].push_back(vals[q]);
+        std::cerr << "  pre-strain " << e << (mode == 0 ? " isotropic" : " shear") << ": loading "
+                  << r.loading * scale << "  unloading " << r.unloading * scale << "  residual "
+                  << r.residual << "\n";
+      }
+    char name[64];
+    std::snprintf(name, sizeof name, "phi_%.4f", c.phi);
+    out.add_sweep(
+        {"/reversibility/" + (tag.empty() ? "" : tag + "_") + name, tag, m.phi, m.z_corrected}, rv);
+  }
   if (s.amplitudes.empty() || !jammed) return;
   // Amplitude sweep at the base probing rate (bounded step counts), from the same state.
   // The amplitudes whose step count reaches the cap share one reference run.

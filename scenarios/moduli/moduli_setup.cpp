@@ -42,6 +42,9 @@ Setup read_setup(const SceneFile& scene) {
   s.kt_ratios = scene.reals("probe.kt_over_kn", {});
   s.amplitudes = scene.reals("probe.amplitudes", {});
   s.sweep_same_steps = scene.flag("probe.amplitudes_same_steps", false);
+  s.prestrains = scene.reals("probe.prestrains", {});
+  s.prestrain_relax_ratio = scene.real("probe.prestrain_relax_ratio", 1e-10);
+  scene.require(s.prestrain_relax_ratio > 0, "probe.prestrain_relax_ratio", "must be positive");
   scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
   scene.require(s.strain_steps > 0 && s.probe_relax >= 0, "probe.strain_steps",
                 "and probe.relax_steps must be positive");
@@ -50,6 +53,9 @@ Setup read_setup(const SceneFile& scene) {
   for (double a : s.amplitudes)
     scene.require(a > 0 && a <= 0.05, "probe.amplitudes", "must lie in (0, 0.05]");
   for (double r : s.kt_ratios) scene.require(r >= 0, "probe.kt_over_kn", "must not be negative");
+  for (double e : s.prestrains)
+    scene.require(e > s.amplitude && e <= 0.05, "probe.prestrains",
+                  "must lie in (probe.amplitude, 0.05]: the reversal starts with one amplitude");
   if (!s.kt_ratios.empty())
     scene.require(s.contact.tangential == "coulomb" && s.contact.coulomb.law == 0 &&
                       s.contact.normal != "hertz",

@@ -51,6 +51,8 @@ struct Setup {
   std::vector<double> kt_ratios;   // probing tangential stiffness over normal (empty: as prepared)
   std::vector<double> amplitudes;  // amplitude sweep (empty: none)
   bool sweep_same_steps = false;   // sweep in the base probe's steps instead of at its rate
+  std::vector<double> prestrains;  // reversibility test (empty: none)
+  double prestrain_relax_ratio = 1e-10;
 };
 
 // Reads every key of the scene (unknown keys are refused) and checks their ranges.

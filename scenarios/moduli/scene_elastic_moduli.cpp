@@ -215,7 +215,9 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         "that still has a contact network and the highest that has none (they overlap where "
         "the network flickers near jamming; bounded by the lowest target)";
   }
-  if (!s.amplitudes.empty()) summary["amplitude_sweeps"] = out.sweeps;
+  // Amplitude sweeps and reversibility tests, one entry per configuration (the columns say
+  // which: "amplitude" or "prestrain").
+  if (!s.amplitudes.empty() || !s.prestrains.empty()) summary["amplitude_sweeps"] = out.sweeps;
   if (s.halving) {
     // Largest relative change of K, G, M over all configurations when the probing
     // amplitude or rate is halved: the elastic-plateau criterion is < 1 %.

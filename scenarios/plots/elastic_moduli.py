@@ -14,6 +14,11 @@ h5, outdir = sys.argv[1], sys.argv[2]
 with h5py.File(h5, "r") as f:
     t = {k: f["table"][k][:] for k in f["table"]}
     prep = {k: f["preparation"][k][:] for k in f["preparation"]} if "preparation" in f else {}
+    reversibility = {}
+    if "reversibility" in f:
+        for name in f["reversibility"]:
+            g = f["reversibility"][name]
+            reversibility[name] = {k: g[k][:] for k in g}
     sweeps = {}
     if "sweep" in f:
         for name in f["sweep"]:
@@ -32,6 +37,15 @@ def groups(t):
 
 
 series = groups(t)
+
+
+def summary_json():
+    path = os.path.join(os.path.dirname(os.path.abspath(h5)), "summary.json")
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}
 
 
 def study_parameters():
@@ -253,15 +267,19 @@ if len(ratios) > 2 and 0.0 in ratios:
 if "direction" in prep and len(prep["phi"]):
     mus = study_parameters().get("preparation.mu") or []
     variants = sorted(set(prep["variant"].astype(int)))
+    # Variant names as the run tagged them (summary.json "jamming"), else by friction.
+    tags = {j["variant"]: j.get("tag") for j in summary_json().get("jamming", [])}
 
     def vlabel(v):
+        if tags.get(v):
+            return tags[v]
         return "mu %g" % mus[v] if len(mus) == len(variants) else "variant %d" % v
 
     hertz = np.all(np.isnan(prep["pressure_star"]))
     fig, axes = plt.subplots(2, 3, figsize=(14, 7.5))
     panels = [(axes[0, 0], "z_corrected", "Z (non-rattlers)", False),
               (axes[0, 1], "pressure" if hertz else "pressure_star",
-               "P" if hertz else "P* = P dbar / k_n", True),
+               "P" if hertz else "P* = P dbar / k_n", "symlog"),
               (axes[0, 2], "ekin_over_epot", "E_kin / E_pot", True),
               (axes[1, 0], "inertial_number", "I_v = rate dbar sqrt(rho / P)", True)]
     for n, v in enumerate(variants):
@@ -270,12 +288,14 @@ if "direction" in prep and len(prep["phi"]):
             for d, ls in ((1, "-"), (-1, "--")):
                 sel = on & (prep["direction"] == d)
                 y = prep[key][sel]
-                ok = np.isfinite(y) & ((y > 0) if log else True)
+                ok = np.isfinite(y) & ((y > 0) if log is True else True)
                 ax.plot(prep["phi"][sel][ok], y[ok], ls, color="C%d" % n, lw=1,
                         label=vlabel(v) + (" compression" if d > 0 else " decompression"))
             ax.set_ylabel(name)
-            if log:
+            if log is True:
                 ax.set_yscale("log")
+            elif log == "symlog":  # cohesive packings go tensile on decompression
+                ax.set_yscale("symlog", linthresh=1e-6)
     # Contact-number fractions of the first and the last variant.
     for ax, v in ((axes[1, 1], variants[0]), (axes[1, 2], variants[-1])):
         on = prep["variant"].astype(int) == v
@@ -298,15 +318,6 @@ if "direction" in prep and len(prep["phi"]):
 # Jamming density against the preparation friction (summary.json "jamming"): the fitted root
 # of the unloading branch with its standard error, and the lowest density of the branch with
 # a contact network and the highest without (the range where the network flickers).
-def summary_json():
-    path = os.path.join(os.path.dirname(os.path.abspath(h5)), "summary.json")
-    try:
-        with open(path) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return {}
-
-
 jam = [j for j in summary_json().get("jamming", []) if j.get("mu_preparation") is not None]
 if len({j["mu_preparation"] for j in jam}) > 1:
     mu = np.array([j["mu_preparation"] for j in jam], float)
@@ -347,3 +358,28 @@ if "kc_preparation" in t and len(set(t["kc_preparation"])) > 1:
     if title:
         fig.suptitle(title, fontsize=10)
     save(fig, outdir, "moduli_vs_cohesion.png")
+
+# Reversibility (probe.prestrains): after a pre-strain of growing size, the modulus of the
+# first small reversal against the secant modulus of the pre-strain (1: elastic), and the
+# stress left once the whole pre-strain is reversed (0: reversible).
+if reversibility:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for n, (name, r) in enumerate(sorted(reversibility.items())):
+        for mode, marker, word in ((0, "o", "isotropic (K)"), (1, "s", "shear (G)")):
+            sel = r["mode"] == mode
+            e = r["prestrain"][sel]
+            axes[0].plot(e, r["unloading_modulus_star"][sel] / r["loading_modulus_star"][sel],
+                         marker + "-", color="C%d" % n, ms=4, label="%s, %s" % (name, word))
+            axes[1].plot(e, np.abs(r["residual"][sel]), marker + "-", color="C%d" % n, ms=4,
+                         label="%s, %s" % (name, word))
+    axes[0].axhline(1, color="k", lw=0.6)
+    axes[0].set_ylabel("unloading modulus / loading (secant) modulus")
+    axes[1].set_ylabel("|stress left after the full reversal| / stress of the pre-strain")
+    axes[1].set_yscale("log")
+    for ax in axes:
+        ax.set_xscale("log")
+        ax.set_xlabel("pre-strain")
+        ax.legend(fontsize=6)
+    if title:
+        fig.suptitle(title + ": reversibility", fontsize=10)
+    save(fig, outdir, "reversibility.png")
