@@ -374,7 +374,7 @@ if reversibility:
                          label="%s, %s" % (name, word))
     axes[0].axhline(1, color="k", lw=0.6)
     axes[0].set_ylabel("unloading modulus / loading (secant) modulus")
-    axes[1].set_ylabel("|stress left after the full reversal| / stress of the pre-strain")
+    axes[1].set_ylabel("|stress left after full reversal| / pre-strain stress", fontsize=9)
     axes[1].set_yscale("log")
     for ax in axes:
         ax.set_xscale("log")
