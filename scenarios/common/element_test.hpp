@@ -74,6 +74,10 @@ struct Moduli {
   // sum_c |Delta| / sum_c |eps l| (defined for every mode), and for the isotropic probe also
   // the per-contact mean (1/M) sum_c |Delta| / |eps l| (there eps l never vanishes).
   double eta_K = 0, eta_G = 0, eta_M = 0, eta_K_per_contact = 0;
+  // Fabric change along the probe, relative to the trace F_v of the state before: of the
+  // trace in the isotropic and the (first) shear probe, and of F_aa - F_bb in the plane of
+  // that shear (compress a, stretch b).
+  double fabric_v_change_K = 0, fabric_v_change_G = 0, fabric_dev_change_G = 0;
 };
 
 // One probing mode: the state before, the state after straining and relaxing, the true
@@ -137,6 +141,15 @@ inline Moduli moduli_from(const ModeResult& iso, const std::vector<ShearMode>& s
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
   out.eta_K = iso.na.eta_ratio, out.eta_K_per_contact = iso.na.eta;
+  auto fv = [](const Measurements& q) { return q.fabric[0] + q.fabric[1] + q.fabric[2]; };
+  if (fv(a) > 0) out.fabric_v_change_K = (fv(b) - fv(a)) / fv(a);
+  if (!shear.empty() && fv(shear[0].r->before) > 0) {
+    const ShearMode& m = shear[0];
+    const Measurements &c = m.r->before, &e = m.r->after;
+    out.fabric_v_change_G = (fv(e) - fv(c)) / fv(c);
+    out.fabric_dev_change_G =
+        ((e.fabric[m.a] - e.fabric[m.b]) - (c.fabric[m.a] - c.fabric[m.b])) / fv(c);
+  }
   const double ns = static_cast<double>(shear.size()), nu = static_cast<double>(uni.size());
   for (const ShearMode& m : shear) {
     const Measurements &c = m.r->before, &e = m.r->after;

@@ -246,10 +246,23 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
                            mod.eta_M,
                            a / (n * s.params.dt) * inertia_scale,
                            static_cast<double>(n),
-                           reversal};
-    const char* names[] = {
-        "amplitude", "K_star", "G_star",          "M_star",       "eta_K",
-        "eta_G",     "eta_M",  "inertial_number", "strain_steps", "reversal_residual"};
+                           reversal,
+                           mod.fabric_v_change_K,
+                           mod.fabric_v_change_G,
+                           mod.fabric_dev_change_G};
+    const char* names[] = {"amplitude",
+                           "K_star",
+                           "G_star",
+                           "M_star",
+                           "eta_K",
+                           "eta_G",
+                           "eta_M",
+                           "inertial_number",
+                           "strain_steps",
+                           "reversal_residual",
+                           "fabric_v_change_K",
+                           "fabric_v_change_G",
+                           "fabric_dev_change_G"};
     for (size_t q = 0; q < std::size(vals); ++q) sw[names[q]].push_back(vals[q]);
     std::cerr << "  sweep amplitude " << a << ": K* " << mod.K * scale << "  G* " << mod.G * scale
               << "  M* " << mod.M * scale << "\n";

@@ -174,7 +174,8 @@ with open(tmp, "w") as f:
 os.replace(tmp, outdir + "/table.md")
 
 if sweeps:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fabric = all("fabric_dev_change_G" in sw for sw in sweeps.values())
+    fig, axes = plt.subplots(1, 3 if fabric else 2, figsize=(15 if fabric else 10, 4))
     for n, (name, s) in enumerate(sorted(sweeps.items())):
         c = "C%d" % n
         for m, mk in (("K", "o-"), ("G", "s--"), ("M", "^:")):
@@ -190,6 +191,19 @@ if sweeps:
     axes[1].set_xlabel("probe strain amplitude")
     axes[1].set_ylabel("isotropic probe: eta, |reversal residual|")
     axes[1].legend(fontsize=6)
+    if fabric:  # how the contact network changes along the probe
+        for n, (name, sw) in enumerate(sorted(sweeps.items())):
+            c = "C%d" % n
+            for key, mk, what in (("fabric_v_change_K", "o-", "dF_v/F_v isotropic"),
+                                  ("fabric_v_change_G", "s--", "dF_v/F_v shear"),
+                                  ("fabric_dev_change_G", "^:", "d(F_xx-F_yy)/F_v shear")):
+                y = np.abs(sw[key])
+                ok = y > 0
+                axes[2].loglog(sw["amplitude"][ok], y[ok], mk, color=c, ms=4,
+                               label="%s, %s" % (what, name))
+        axes[2].set_xlabel("probe strain amplitude")
+        axes[2].set_ylabel("|fabric change along the probe| / F_v")
+        axes[2].legend(fontsize=5)
     save(fig, outdir, "moduli_vs_amplitude.png")
 
 sizes = np.unique(t["particles"])
