@@ -221,6 +221,12 @@ struct NonAffine {
   double eta = 0;        // (1/M) sum_c |Delta| / |eps l|  (contacts with eps l != 0)
   double eta_ratio = 0;  // sum_c |Delta| / sum_c |eps l|
   double contacts = 0;   // M
+  // The normal part only, Delta . n against the affine normal displacement (eps l) . n:
+  // sum_c |Delta . n| / sum_c |(eps l) . n|, and the signed mean that undoes the affine
+  // normal displacement, -sum_c (Delta . n) sgn((eps l) . n) / sum_c |(eps l) . n| (the
+  // fluctuation theory's 2 rho in an isotropic strain).
+  double eta_normal_ratio = 0;
+  double normal_relaxation = 0;
 };
 
 // Displacements by identity from positions x0 to x1 (both by identity, same box).
@@ -252,7 +258,7 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
                                 const typename Particles<ExecSpace>::vec_view& drift = {}) {
   const bool has_drift = drift.extent(0) == static_cast<size_t>(p.n);
   using mem = typename ExecSpace::memory_space;
-  Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::nonaffine", p.n, 4);
+  Kokkos::View<double**, Kokkos::LayoutRight, mem> per("measure::nonaffine", p.n, 7);
   const ParticleViews<ExecSpace> pv(p);
   auto offsets = nl.offsets(), neighbors = nl.neighbors(), owned_end = nl.owned_end();
   const PeriodicBox b = box;
@@ -261,7 +267,8 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
   Kokkos::parallel_for(
       "dem::measure::nonaffine", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
-        double sum_d = 0, sum_e = 0, sum_ratio = 0, m = 0;
+        double sum_d = 0, sum_e = 0, sum_ratio = 0, m = 0, sum_dn = 0, sum_dn_signed = 0,
+               sum_en = 0;
         const Body bi = load_body(pv, i, false);
         const int idi = pv.id(i);
         for (int k = offsets(i); k < owned_end(i); ++k) {  // each contact once, by its owner
@@ -270,7 +277,8 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
           double rx, ry, rz, r2;
           if (!touching(pv, b, bi, j, rx, ry, rz, r2)) continue;
           const double l[3] = {rx, ry, rz};
-          double dd = 0, ee = 0;
+          const double inv_r = 1.0 / Kokkos::Experimental::sqrt(r2);
+          double dd = 0, ee = 0, dn = 0, en = 0;
           for (int d = 0; d < 3; ++d) {
             const double di = has_drift ? drift(idi, d) : 0.0;
             const double dj = has_drift ? drift(idj, d) : 0.0;
@@ -281,18 +289,25 @@ NonAffine nonaffine_fluctuation(const Particles<ExecSpace>& p, const NeighborLis
             const double el = (s[d] - 1.0) * l[d];
             dd += (ui - uj) * (ui - uj);
             ee += el * el;
+            dn += (ui - uj) * l[d] * inv_r;
+            en += el * l[d] * inv_r;
           }
+          sum_dn += Kokkos::Experimental::fabs(dn), sum_en += Kokkos::Experimental::fabs(en);
+          sum_dn_signed += en > 0 ? dn : (en < 0 ? -dn : 0.0);
           dd = Kokkos::Experimental::sqrt(dd), ee = Kokkos::Experimental::sqrt(ee);
           sum_d += dd, sum_e += ee, m += 1.0;
           if (ee > 0) sum_ratio += dd / ee;
         }
         per(i, 0) = sum_d, per(i, 1) = sum_e, per(i, 2) = sum_ratio, per(i, 3) = m;
+        per(i, 4) = sum_dn, per(i, 5) = sum_dn_signed, per(i, 6) = sum_en;
       });
-  const auto sums = deterministic_column_sums<4, ExecSpace>(per, p.n);
+  const auto sums = deterministic_column_sums<7, ExecSpace>(per, p.n);
   NonAffine out;
   out.contacts = sums[3];
   out.eta = sums[3] > 0 ? sums[2] / sums[3] : 0.0;
   out.eta_ratio = sums[1] > 0 ? sums[0] / sums[1] : 0.0;
+  out.eta_normal_ratio = sums[6] > 0 ? sums[4] / sums[6] : 0.0;
+  out.normal_relaxation = sums[6] > 0 ? -sums[5] / sums[6] : 0.0;
   return out;
 }
 

@@ -48,11 +48,24 @@ TYPED_TEST(NonAffineTest, FluctuationOfAHandMadeDisplacementFieldMatchesItsDefin
   const double expect = 0.5 * (un / (std::fabs(e) * l01) + un / (std::fabs(e) * l12));
   EXPECT_NEAR(na.eta, expect, 1e-9 * expect);
   EXPECT_NEAR(na.eta_ratio, 2 * un / (std::fabs(e) * (l01 + l12)), 1e-9 * expect);
+  // Normal parts along the current branch vectors l01 = (l01, u_y, 0) and l12 = (-l12, u_y, 0)
+  // (from the other particle to particle 1; either order gives the same products):
+  // Delta . n = u . l / |l|, (eps l) . n = e l_x^2 / |l|, both contacts compressed (e < 0).
+  const double L01 = std::hypot(l01, u[1]), L12 = std::hypot(l12, u[1]);
+  const double dn01 = (u[0] * l01 + u[1] * u[1]) / L01, dn12 = (-u[0] * l12 + u[1] * u[1]) / L12;
+  const double en = std::fabs(e) * (l01 * l01 / L01 + l12 * l12 / L12);
+  EXPECT_NEAR(na.eta_normal_ratio, (std::fabs(dn01) + std::fabs(dn12)) / en, 1e-9);
+  // The signed mean: a non-affine move along +u_x opens contact 0-1 (undoing its affine
+  // approach) and closes 1-2 further, so the two nearly cancel.
+  EXPECT_NEAR(na.normal_relaxation, (dn01 + dn12) / en, 1e-9);
+  EXPECT_GT(na.eta_normal_ratio, 10 * std::fabs(na.normal_relaxation));
 
   // Without the extra displacement the deformation is affine: no fluctuation at all.
   for (int d = 0; d < 3; ++d) hx(1, d) -= u[d];
   Kokkos::deep_copy(p.x, hx);
   const NonAffine affine = nonaffine_fluctuation(p, nl, box, box0, x0);
   EXPECT_LT(affine.eta, 1e-9);
+  EXPECT_LT(affine.eta_normal_ratio, 1e-9);
+  EXPECT_LT(std::fabs(affine.normal_relaxation), 1e-9);
   EXPECT_EQ(affine.contacts, 2.0);
 }

@@ -74,6 +74,9 @@ struct Moduli {
   // sum_c |Delta| / sum_c |eps l| (defined for every mode), and for the isotropic probe also
   // the per-contact mean (1/M) sum_c |Delta| / |eps l| (there eps l never vanishes).
   double eta_K = 0, eta_G = 0, eta_M = 0, eta_K_per_contact = 0;
+  // The isotropic probe's normal part: sum |Delta . n| / sum |(eps l) . n|, and the signed
+  // fraction of the affine normal displacement the relaxation undoes (FT: 2 (rho + rho_s)).
+  double eta_K_normal = 0, normal_relaxation_K = 0;
   // Fabric change along the probe, relative to the trace F_v of the state before: of the
   // trace in the isotropic and the (first) shear probe, and of F_aa - F_bb in the plane of
   // that shear (compress a, stretch b).
@@ -141,6 +144,7 @@ inline Moduli moduli_from(const ModeResult& iso, const std::vector<ShearMode>& s
   out.K_n = (p(b.stress_normal) - p(a.stress_normal)) / ev;
   out.K_t = (p(b.stress_tangential) - p(a.stress_tangential)) / ev;
   out.eta_K = iso.na.eta_ratio, out.eta_K_per_contact = iso.na.eta;
+  out.eta_K_normal = iso.na.eta_normal_ratio, out.normal_relaxation_K = iso.na.normal_relaxation;
   auto fv = [](const Measurements& q) { return q.fabric[0] + q.fabric[1] + q.fabric[2]; };
   if (fv(a) > 0) out.fabric_v_change_K = (fv(b) - fv(a)) / fv(a);
   if (!shear.empty() && fv(shear[0].r->before) > 0) {

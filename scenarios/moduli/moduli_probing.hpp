@@ -155,6 +155,8 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
         {"eta_G", mod.eta_G},
         {"eta_M", mod.eta_M},
         {"eta_K_per_contact", mod.eta_K_per_contact},
+        {"eta_K_normal", mod.eta_K_normal},
+        {"normal_relaxation_K", mod.normal_relaxation_K},
         {"halving_amplitude_rel_change_K", dK_a},
         {"halving_amplitude_rel_change_G", dG_a},
         {"halving_amplitude_rel_change_M", dM_a},
@@ -170,6 +172,7 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
         {"K_ft2_closure", thc.K_ft2},
         {"G_ft2_closure", thc.G_ft2},
         {"rho", th.rho},
+        {"rho_s", th.rho_s},
         {"zeta", th.zeta}};
     row.insert(values.begin(), values.end());
     // Structure of the configuration: contact-number histogram, fabric tensor, and the

@@ -397,3 +397,36 @@ if reversibility:
     if title:
         fig.suptitle(title + ": reversibility", fontsize=10)
     save(fig, outdir, "reversibility.png")
+
+# Non-affine fluctuation of the isotropic probe against the fluctuation theory: the full
+# relative displacement (eta_K), its normal part (eta_K_normal, unsigned) and the signed
+# fraction of the affine normal approach that the relaxation undoes, which FT predicts as
+# 2 rho (first ring) or 2 (rho + rho_s) (second ring): K^FT = (1 - 2 (rho + rho_s)) K^EMT.
+if "normal_relaxation_K" in t and np.any(jammed):
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for n, (key, idx) in enumerate(sorted(series.items())):
+        idx = np.array(idx)
+        idx = idx[jammed[idx]]
+        if len(idx) == 0:
+            continue
+        x = t["phi"][idx] * t["z_corrected"][idx]
+        o = np.argsort(x)
+        c = "C%d" % n
+        lab = label_of(key)
+        ax.plot(x[o], t["eta_K"][idx][o], "o", color=c, mfc="none", ms=4,
+                label="eta_K (full), " + lab)
+        ax.plot(x[o], t["eta_K_normal"][idx][o], "s", color=c, mfc="none", ms=4,
+                label="eta_K normal part, " + lab)
+        ax.plot(x[o], t["normal_relaxation_K"][idx][o], "o", color=c, ms=5,
+                label="normal relaxation (signed), " + lab)
+        ax.plot(x[o], 2 * t["rho"][idx][o], ":", color=c, lw=1,
+                label="FT 2 rho" if n == 0 else None)
+        ax.plot(x[o], 2 * (t["rho"][idx][o] + t["rho_s"][idx][o]), "-", color=c, lw=1,
+                label="FT 2 (rho + rho_s)" if n == 0 else None)
+    ax.set_yscale("log")
+    ax.set_xlabel("phi Z")
+    ax.set_ylabel("non-affine / affine (isotropic probe)")
+    ax.legend(fontsize=6)
+    if title:
+        ax.set_title(title, fontsize=9)
+    save(fig, outdir, "nonaffine_vs_theory.png")
