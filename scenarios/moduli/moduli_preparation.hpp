@@ -56,7 +56,10 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
   const double dbar = dsum / host.size();
   using System = DemSystem<Exec, Model>;
   std::optional<System> sys;
-  sys.emplace(Particles<Exec>::from_host(host), box, model, s.params);
+  // With preparation.friction_from = "phi_0" the gas is compressed and relaxed without
+  // friction and the preparation friction acts from the compression to phi_max on.
+  const Model gas_model = s.friction_from_phi0 ? with_friction(model, 0.0) : model;
+  sys.emplace(Particles<Exec>::from_host(host), box, gas_model, s.params);
   double rate_now = s.rate;
   double direction_now = 1;  // +1 compression, -1 decompression (the unloading branch)
   // P* = P dbar / k_n where k_n is a constant of the law (linear; hysteretic: k_2); a Hertz
@@ -117,7 +120,12 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
   for (double t = s.gas.phi + 0.02; s.phi0 - t > 1e-12; t += 0.02)
     stages.push_back({[&compress_gas, t] { compress_gas(t); }, false});
   stages.push_back({[&compress_gas, &s] { compress_gas(s.phi0); }, true});
-  stages.push_back({[&] { relax(*sys, s.relax_ratio, s.relax_max); }, true});  // 3. relax
+  stages.push_back({[&] {
+                      relax(*sys, s.relax_ratio, s.relax_max);
+                      sys->set_model(model);  // friction from here on (a no-op by default)
+                    },
+                    true});  // 3. relax
+  const long relaxed_stage = static_cast<long>(stages.size()) - 1;
   std::vector<double> sorted = s.targets;
   double from = s.phi0;
   if (s.loading_branch) {  // configurations on the way up (strongly cohesive samples)
@@ -157,7 +165,8 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
       if (!std::filesystem::exists(ck.restart(k)))
         throw InputError(ck.pointer() + ": the checkpoint predates exact restarts (no " +
                          ck.restart(k) + "); run without --resume");
-      sys.emplace(restart_system<System>(read_config(ck.state(k)), model, s.params));
+      sys.emplace(restart_system<System>(read_config(ck.state(k)),
+                                         k < relaxed_stage ? gas_model : model, s.params));
       sys->load_restart(H5Reader(ck.restart(k)), "/restart");
       std::cerr << "variant " << label << ": continuing after stage " << k + 1 << " of "
                 << stages.size() << "\n";

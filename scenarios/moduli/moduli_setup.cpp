@@ -25,6 +25,13 @@ Setup read_setup(const SceneFile& scene) {
   scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
+  // Read only when present, so that studies checkpointed before the key existed resume.
+  if (scene.has("preparation.friction_from")) {
+    const std::string from = scene.text("preparation.friction_from");
+    scene.require(from == "start" || from == "phi_0", "preparation.friction_from",
+                  "must be \"start\" (the gas too, the default) or \"phi_0\"");
+    s.friction_from_phi0 = from == "phi_0";
+  }
   s.jamming_p_max =
       scene.real("preparation.jamming_fit_pressure_max", s.contact.normal == "hertz" ? 0.0 : 1e-3);
   scene.require(s.jamming_p_max >= 0, "preparation.jamming_fit_pressure_max",

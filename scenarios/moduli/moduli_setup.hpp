@@ -35,6 +35,7 @@ struct Setup {
   std::string start_from;  // probe this saved configuration instead of preparing
   double phi0 = 0.5, phi_max = 0.82, rate = 0, min_rate = 0, prep_inertial = 0, gas_rate = 0;
   bool loading_branch = false;
+  bool friction_from_phi0 = false;  // gas compressed and relaxed without friction
   std::vector<double> targets;
   double relax_ratio = 1e-8;
   long relax_max = 200000;
