@@ -182,6 +182,10 @@ void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
       row["contact_fraction_" + std::to_string(q) + (q == 6 ? "_or_more" : "")] =
           m.contact_histogram[q];
     for (int q = 0; q < 6; ++q) row[std::string("fabric_") + comp[q]] = m.fabric[q];
+    // The source's normalisation of the cohesive set, P / k* with k* = k1 / (2<a>) (the
+    // engine's P* divides by k2 / dbar, the un/reloading stiffness).
+    if (s.contact.normal == "hysteretic")
+      row["pressure_over_k1_star"] = m.pressure * st.dbar / s.contact.hysteretic.k1;
     row["pressure_normal_star"] =
         (m.stress_normal[0] + m.stress_normal[1] + m.stress_normal[2]) / 3 * scale;
     row["pressure_tangential_star"] =
