@@ -13,30 +13,39 @@
 
 using namespace granular;
 
+// The 6 x 6 x 6 simple cubic lattice (spacing a = 1, radius 0.502 a: overlap 0.004 a) of
+// frictionless linear springs k = 2e3, with light background damping.
+constexpr double kA = 1.0, kK = 2.0e3, kRadius = 0.502;
+template <class Exec>
+DemSystem<Exec, FrictionlessLinear> cubic_lattice() {
+  const int m = 6;
+  HostParticles h;
+  h.resize(m * m * m);
+  for (int i = 0; i < m * m * m; ++i) {
+    h.x[i] = (i % m + 0.5) * kA, h.y[i] = ((i / m) % m + 0.5) * kA,
+    h.z[i] = (i / (m * m) + 0.5) * kA;
+    h.radius[i] = kRadius * kA, h.density[i] = 1.0;
+  }
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.len[d] = m * kA;
+  DemParams prm;
+  prm.dt = 1e-3, prm.skin = 0.05, prm.damping.translational = 1.0;
+  return DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(h), box,
+                                             frictionless_linear(kK, 0.0), prm);
+}
+
 template <class T>
 class ProbingTest : public ::testing::Test {};
 TYPED_TEST_SUITE(ProbingTest, granular::testing::ExecSpaces);
 
 TYPED_TEST(ProbingTest, SimpleCubicLatticeModuliMatchTheExactSpringNetwork) {
   using Exec = TypeParam;
-  const int m = 6;
-  const double a = 1.0, k = 2.0e3;
-  HostParticles h;
-  h.resize(m * m * m);
-  for (int i = 0; i < m * m * m; ++i) {
-    h.x[i] = (i % m + 0.5) * a, h.y[i] = ((i / m) % m + 0.5) * a, h.z[i] = (i / (m * m) + 0.5) * a;
-    h.radius[i] = 0.502 * a, h.density[i] = 1.0;
-  }
-  PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.len[d] = m * a;
-  DemParams prm;
-  prm.dt = 1e-3, prm.skin = 0.05, prm.damping.translational = 1.0;
-  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
-                                          frictionless_linear(k, 0.0), prm);
+  const double a = kA, k = kK;
+  auto sys = cubic_lattice<Exec>();
   double residual = 1;
   const Moduli mod = probe_moduli(sys, 1e-6, 200, 50, &residual);
   EXPECT_LT(std::fabs(residual), 1e-6);  // reversing the strain restores the stress
-  const double d0 = 2 * 0.502 * a - a;
+  const double d0 = 2 * kRadius * a - a;
   EXPECT_NEAR(mod.K / (k / (3 * a) * (1 + 2 * d0 / a)), 1.0, 1e-5);
   EXPECT_NEAR(mod.G / (k / (2 * a) * (1 - d0 / a)), 1.0, 1e-5);
   EXPECT_NEAR(mod.M / (k / a), 1.0, 1e-5);
@@ -59,23 +68,9 @@ TYPED_TEST(ProbingTest, SimpleCubicLatticeModuliMatchTheExactSpringNetwork) {
 // left after the whole reversal.
 TYPED_TEST(ProbingTest, PrestrainIsUndoneAndAnOpenedLatticeUnloadsOnItsRemainingBonds) {
   using Exec = TypeParam;
-  const int m = 6;
-  const double a = 1.0, k = 2.0e3;
-  HostParticles h;
-  h.resize(m * m * m);
-  for (int i = 0; i < m * m * m; ++i) {
-    h.x[i] = (i % m + 0.5) * a, h.y[i] = ((i / m) % m + 0.5) * a, h.z[i] = (i / (m * m) + 0.5) * a;
-    h.radius[i] = 0.502 * a, h.density[i] = 1.0;
-  }
-  PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.len[d] = m * a;
-  DemParams prm;
-  prm.dt = 1e-3, prm.skin = 0.05, prm.damping.translational = 1.0;
-  auto make = [&] {
-    return DemSystem<Exec, FrictionlessLinear>(Particles<Exec>::from_host(h), box,
-                                               frictionless_linear(k, 0.0), prm);
-  };
-  const double d0 = 2 * 0.502 * a - a;
+  const double a = kA, k = kK;
+  auto make = [] { return cubic_lattice<Exec>(); };
+  const double d0 = 2 * kRadius * a - a;
   const double G0 = k / (2 * a) * (1 - d0 / a), K0 = k / (3 * a) * (1 + 2 * d0 / a);
   {
     auto sys = make();
@@ -96,7 +91,7 @@ TYPED_TEST(ProbingTest, PrestrainIsUndoneAndAnOpenedLatticeUnloadsOnItsRemaining
     auto sys = make();
     const Reversibility r =
         probe_reversibility(sys, kPureShear, 1e-2, 1e-6, 8000, 200, 2000, 1e-10, 1000);
-    const double ax = a * std::exp(-1e-2), ay = a * std::exp(1e-2), dx = 2 * 0.502 * a - ax;
+    const double ax = a * std::exp(-1e-2), ay = a * std::exp(1e-2), dx = 2 * kRadius * a - ax;
     EXPECT_NEAR(r.unloading / (k * (ax - dx) / (4 * ay * a)), 1.0, 1e-3);
     EXPECT_LT(r.loading / G0, 0.9);  // the secant modulus over the opening is lower too
     EXPECT_LT(std::fabs(r.residual), 1e-3);

@@ -31,12 +31,11 @@ std::vector<JammingPoint> jamming_points(const std::map<std::string, std::vector
     std::vector<std::pair<double, double>> pts;
     for (size_t i = 0; i < phi.size(); ++i) {
       if (static_cast<int>(var[i]) != v || dir[i] >= 0) continue;
-      if (z[i] > 0) {
-        if (!(phi[i] >= j.phi_lowest_jammed))
-          j.phi_lowest_jammed = std::fmin(phi[i], j.phi_lowest_jammed);
-      } else if (!(phi[i] <= j.phi_highest_unjammed)) {
-        j.phi_highest_unjammed = std::fmax(phi[i], j.phi_highest_unjammed);
-      }
+      // fmin/fmax ignore the NaN they start from.
+      if (z[i] > 0)
+        j.phi_lowest_jammed = std::fmin(j.phi_lowest_jammed, phi[i]);
+      else
+        j.phi_highest_unjammed = std::fmax(j.phi_highest_unjammed, phi[i]);
       if (z[i] > 0 && p[i] > 0 && p[i] <= p_max) {
         const double y = std::pow(p[i], 1.0 / alpha);
         pts.push_back({phi[i], y});

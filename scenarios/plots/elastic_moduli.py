@@ -337,7 +337,6 @@ if len({j["mu_preparation"] for j in jam}) > 1:
     mu = np.array([j["mu_preparation"] for j in jam], float)
     val = lambda k: np.array([np.nan if j.get(k) is None else j[k] for j in jam], float)
     fig, ax = plt.subplots(figsize=(6, 4))
-    x = np.where(mu > 0, mu, np.nan)
     ax.errorbar(mu, val("phi_J"), yerr=val("phi_J_stderr"), fmt="o-", color="C0", capsize=3,
                 label="phi_J (fit of the unloading branch)")
     ax.plot(mu, val("phi_lowest_jammed"), "v", color="C1", label="lowest phi with a network (unloading)")
