@@ -275,6 +275,52 @@ if len(ratios) > 2 and 0.0 in ratios:
         fig.suptitle(title, fontsize=10)
     save(fig, outdir, "tangential_stiffness.png")
 
+# The tangential share of the shear modulus, G_T*/G_N*, against phi Z per series and (with
+# several probing ratios) against k_t/k_n: affine 1.5 k_t/k_n, FT2's partition
+# (G^FT - (3/5) K^FT) / ((3/5) K^FT), and the source's Hertz value 0.15 for orientation.
+share_rows = jammed & (t["kt_kn"] > 0) & (t["G_n_star"] > 0) if "G_n_star" in t else []
+if np.any(share_rows):
+    phiz = t["phi"] * t["z_corrected"]
+    share = np.where(share_rows, t["G_t_star"] / np.where(share_rows, t["G_n_star"], 1), np.nan)
+    share_ft = (t["G_ft2"] - 0.6 * t["K_ft2"]) / (0.6 * t["K_ft2"])
+    several = len(set(t["kt_kn"][share_rows])) > 2
+    fig, axes = plt.subplots(1, 2 if several else 1, figsize=(10 if several else 5.5, 4),
+                             squeeze=False)
+    axes = axes[0]
+    for n, (key, rows) in enumerate(sorted(series.items())):
+        rows = np.array([i for i in rows if share_rows[i]])
+        if not len(rows):
+            continue
+        rows = rows[np.argsort(phiz[rows])]
+        c = "C%d" % (n % 10)
+        lab = "kt/kn %g" % key[1] if several else ("mu %g" % key[0] if key[0] >= 0 else "series")
+        axes[0].plot(phiz[rows], share[rows], "o", color=c, ms=4, label=lab)
+        axes[0].plot(phiz[rows], share_ft[rows], "-", color=c, lw=0.8)
+        axes[0].axhline(1.5 * key[1], color=c, ls="--", lw=0.6)
+    axes[0].axhline(0.15, color="k", ls=":", lw=1, label="source, Hertz: 0.15")
+    axes[0].set_yscale("log")
+    axes[0].set_xlabel("phi Z")
+    axes[0].set_ylabel("G_T* / G_N*")
+    axes[0].set_title("markers measured, lines FT2 partition, dashed affine 1.5 kt/kn",
+                      fontsize=8)
+    axes[0].legend(fontsize=6)
+    if several:
+        cfg = np.round(t["phi"], 6)
+        for n, c in enumerate(sorted(set(cfg[share_rows]))):
+            rows = np.where(share_rows & (cfg == c))[0]
+            rows = rows[np.argsort(t["kt_kn"][rows])]
+            axes[1].loglog(t["kt_kn"][rows], share[rows], "o-", color="C%d" % (n % 10), ms=4,
+                           label="phi Z = %.2f" % np.mean(phiz[rows]))
+        r = np.array(sorted(set(t["kt_kn"][share_rows])))
+        axes[1].loglog(r, 1.5 * r, "k--", lw=0.8, label="affine 1.5 kt/kn")
+        axes[1].axhline(0.15, color="k", ls=":", lw=1, label="source, Hertz: 0.15")
+        axes[1].set_xlabel("k_t / k_n of the probe")
+        axes[1].set_ylabel("G_T* / G_N*")
+        axes[1].legend(fontsize=6)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    save(fig, outdir, "shear_partition.png")
+
 # The preparation path (series recorded along the protocol, written since the series carry
 # a direction): contact-number fractions, Z, P*, E_kin/E_pot and the inertial number against
 # phi, compression solid and decompression dashed, one colour per preparation variant.
