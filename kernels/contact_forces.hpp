@@ -7,6 +7,7 @@
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
+#include "kernels/contact_batch.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/neighbor_list.hpp"
 
@@ -248,6 +249,150 @@ struct HostParticleViews {
         species{p.species.data()} {}
 };
 
+// A contact that is apart forgets its history. Most such slots are already zero: reading is
+// cheaper than rewriting them every step.
+template <int H>
+KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
+  if (H > 0) {
+    bool stale = false;
+    for (int c = 0; c < H; ++c) stale = stale || hist[k * H + c] != 0.0;
+    if (stale)
+      for (int c = 0; c < H; ++c) hist[k * H + c] = 0.0;
+  }
+}
+
+// One owner row of the one-pass kernel below: particle i evaluates the contacts it owns,
+// adds their forces to itself and scatters the reactions to its partners.
+template <class Model>
+KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const PeriodicBox& b,
+                                              const Model& m, const HostArray<const int>& offsets,
+                                              const HostArray<const int>& owned_end,
+                                              const HostArray<const int>& neighbors, double* hist,
+                                              const HostVec3& fh, const HostVec3& qh,
+                                              const double r3[3], double dt, int i) {
+  constexpr int H = Model::history;
+  constexpr bool rot = Model::rotations;
+  const Body bi = load_body(hv, i, rot);
+  double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
+  const int kend = owned_end(i);
+  for (int k = offsets(i); k < kend; ++k) {
+    const int j = neighbors(k);
+    double rx, ry, rz, r2;
+    if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
+      forget_history<H>(hist, k);
+      continue;
+    }
+    PairState s;
+    pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
+    double h[H > 0 ? H : 1];
+    if (H > 0)
+      for (int c = 0; c < H; ++c) h[c] = hist[k * H + c];
+    PairForce out;
+    m.evaluate(s, dt, h, out);
+    if (H > 0)
+      for (int c = 0; c < H; ++c) hist[k * H + c] = h[c];
+    for (int d = 0; d < 3; ++d) {
+      fi[d] += out.f[d];
+      fh(j, d) -= out.f[d];
+    }
+    if (rot)
+      for (int d = 0; d < 3; ++d) {
+        qi[d] += out.q[d];
+        qh(j, d) += out.qj[d];
+      }
+  }
+  for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
+  if (rot)
+    for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
+}
+
+#if GRANULAR_CONTACT_BATCH
+// The same rows with the contacts evaluated in batches (kernels/contact_batch.hpp): gather
+// the touching contacts of whole rows, evaluate them four at a time (AVX), scatter row by
+// row in list order. Bitwise the results of one_pass_row.
+template <class Model>
+void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, const Model& m,
+                           const HostArray<const int>& offsets,
+                           const HostArray<const int>& owned_end,
+                           const HostArray<const int>& neighbors, const HostArray<const int>& order,
+                           double* hist, const HostVec3& fh, const HostVec3& qh, const double r3[3],
+                           double dt, int q_begin, int q_end) {
+  constexpr int H = Model::history;
+  constexpr bool rot = Model::rotations;
+  static_assert(H == 3 && rot, "the batched law has a tangential spring");
+  ContactBatch cb;
+  auto flush = [&] {
+    cb.evaluate(dt);
+    int c = 0;
+    for (int row = 0; row < cb.rows; ++row) {
+      const int i = cb.row_i[row];
+      double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
+      for (; c < cb.row_end[row]; ++c) {
+        const int j = cb.j[c];
+        const double f[3] = {cb.f0[c], cb.f1[c], cb.f2[c]};
+        for (int d = 0; d < 3; ++d) {
+          fi[d] += f[d];
+          fh(j, d) -= f[d];
+        }
+        if constexpr (rot) {
+          const double qa[3] = {cb.q0[c], cb.q1[c], cb.q2[c]};
+          const double qb[3] = {cb.p0[c], cb.p1[c], cb.p2[c]};
+          for (int d = 0; d < 3; ++d) {
+            qi[d] += qa[d];
+            qh(j, d) += qb[d];
+          }
+          double* h = hist + cb.k[c] * H;
+          h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
+        }
+      }
+      for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
+      if constexpr (rot)
+        for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
+    }
+    cb.n = cb.rows = 0;
+  };
+  for (int q = q_begin; q < q_end; ++q) {
+    const int i = order(q);
+    const int kbeg = offsets(i), kend = owned_end(i);
+    if (cb.rows == ContactBatch::kCap || cb.n + (kend - kbeg) > ContactBatch::kCap) flush();
+    if (kend - kbeg > ContactBatch::kCap) {  // a crowded row: evaluated on its own
+      one_pass_row(hv, b, m, offsets, owned_end, neighbors, hist, fh, qh, r3, dt, i);
+      continue;
+    }
+    const Body bi = load_body(hv, i, rot);
+    for (int k = kbeg; k < kend; ++k) {
+      const int j = neighbors(k);
+      double rx, ry, rz, r2;
+      if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
+        forget_history<H>(hist, k);
+        continue;
+      }
+      const Body bj = load_body(hv, j, rot);
+      const int c = cb.n++;
+      cb.j[c] = j, cb.k[c] = k;
+      cb.rx[c] = rx, cb.ry[c] = ry, cb.rz[c] = rz, cb.r2[c] = r2;
+      // The relative velocity as pair_geometry forms it, with the affine flow.
+      cb.dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx;
+      cb.dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry;
+      cb.dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz;
+      cb.ai[c] = bi.a, cb.aj[c] = bj.a;
+      const auto& pn = m.normal.table(bi.s, bj.s);
+      cb.kn[c] = pn.kn, cb.gn[c] = pn.gn;
+      if constexpr (rot) {
+        cb.wi0[c] = bi.w[0], cb.wi1[c] = bi.w[1], cb.wi2[c] = bi.w[2];
+        cb.wj0[c] = bj.w[0], cb.wj1[c] = bj.w[1], cb.wj2[c] = bj.w[2];
+        const auto& pt = m.tangential.table(bi.s, bj.s);
+        cb.kt[c] = pt.kt, cb.gt[c] = pt.gt, cb.mus[c] = pt.mu_s, cb.mud[c] = pt.mu_d;
+        const double* h = hist + k * H;
+        cb.h0[c] = h[0], cb.h1[c] = h[1], cb.h2[c] = h[2];
+      }
+    }
+    cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
+  }
+  flush();
+}
+#endif
+
 // One pass, for host backends: the owner of each contact evaluates it, adds the force to
 // itself and scatters the reaction to its partner at once, as a serial code with a half
 // list would. No per-contact force array, no second sweep over the list. Writes to the
@@ -256,10 +401,13 @@ struct HostParticleViews {
 // adjacent slabs, so concurrent slabs never touch the same particle. Each slab is swept by
 // one thread in cell order, so every particle's sum has a fixed order whatever the thread
 // count. (A device has too few slabs to fill it; it keeps the two passes above.)
+// `batched`: laws with a batched evaluation (ContactBatchLaw) use it where the processor has
+// AVX; false forces the contact-by-contact rows (tests compare the two).
 template <class ExecSpace, class Model, class HistoryView>
 void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                              const HistoryView& history, const PeriodicBox& box, const Model& model,
-                             const Damping& damping, const double strain_rate[3], double dt) {
+                             const Damping& damping, const double strain_rate[3], double dt,
+                             bool batched = true) {
   const ParticleViews<ExecSpace> pv(p);
   const HostParticleViews hv(p);
   auto f = p.f, torque = p.torque;
@@ -284,56 +432,32 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
       });
   const int slabs = nl.num_slabs();
   const int rounds = slabs >= 3 ? 3 : 1;
+  using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
+#if GRANULAR_CONTACT_BATCH
+  if constexpr (ContactBatchLaw<Model>::available) {
+    if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(model)) {
+      for (int r = 0; r < rounds; ++r) {
+        const int tasks = (slabs - r + rounds - 1) / rounds;
+        Kokkos::parallel_for("dem::compute_forces::slabs", Policy(0, tasks), [=](const int t) {
+          const int slab = t * rounds + r;
+          one_pass_rows_batched(hv, b, m, offsets, owned_end, neighbors, order, hist, fh, qh, rate,
+                                dt, slab_begin(slab), slab_begin(slab + 1));
+        });
+      }
+      return;
+    }
+  }
+#else
+  (void)batched;
+#endif
   for (int r = 0; r < rounds; ++r) {
     const int tasks = (slabs - r + rounds - 1) / rounds;
     Kokkos::parallel_for(
-        "dem::compute_forces::slabs",
-        Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>(0, tasks),
-        KOKKOS_LAMBDA(const int t) {
-          constexpr int H = Model::history;
-          constexpr bool rot = Model::rotations;
+        "dem::compute_forces::slabs", Policy(0, tasks), KOKKOS_LAMBDA(const int t) {
           const int slab = t * rounds + r;
           const double r3[3] = {rate[0], rate[1], rate[2]};
-          for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q) {
-            const int i = order(q);
-            const Body bi = load_body(hv, i, rot);
-            double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
-            const int kend = owned_end(i);
-            for (int k = offsets(i); k < kend; ++k) {
-              const int j = neighbors(k);
-              double rx, ry, rz, r2;
-              if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-                if (H > 0) {  // apart: the history is forgotten (mostly zero already)
-                  bool stale = false;
-                  for (int c = 0; c < H; ++c) stale = stale || hist[k * H + c] != 0.0;
-                  if (stale)
-                    for (int c = 0; c < H; ++c) hist[k * H + c] = 0.0;
-                }
-                continue;
-              }
-              PairState s;
-              pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
-              double h[H > 0 ? H : 1];
-              if (H > 0)
-                for (int c = 0; c < H; ++c) h[c] = hist[k * H + c];
-              PairForce out;
-              m.evaluate(s, dt, h, out);
-              if (H > 0)
-                for (int c = 0; c < H; ++c) hist[k * H + c] = h[c];
-              for (int d = 0; d < 3; ++d) {
-                fi[d] += out.f[d];
-                fh(j, d) -= out.f[d];
-              }
-              if (rot)
-                for (int d = 0; d < 3; ++d) {
-                  qi[d] += out.q[d];
-                  qh(j, d) += out.qj[d];
-                }
-            }
-            for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
-            if (rot)
-              for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
-          }
+          for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q)
+            one_pass_row(hv, b, m, offsets, owned_end, neighbors, hist, fh, qh, r3, dt, order(q));
         });
   }
 }
@@ -349,10 +473,10 @@ template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
-                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>()) {
+                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>(), bool batched = true) {
   if (!two_pass) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
-      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt);
+      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, batched);
       return;
     }
   }

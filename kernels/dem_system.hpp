@@ -39,6 +39,8 @@ struct DemParams {
   double gravity[3] = {0, 0, 0};  // body force per unit mass
   bool two_pass_forces = false;   // host backends: the device's two-pass force kernel instead of
                                   // the one-pass slab kernel (tests compare the two)
+  bool batched_contacts = true;   // host one-pass kernel: laws with a batched (vector)
+                                  // evaluation use it; false: contact by contact (tests)
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -339,7 +341,7 @@ class DemSystem {
       return;
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass());
+                   two_pass(), params_.batched_contacts);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);

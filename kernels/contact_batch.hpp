@@ -1,0 +1,179 @@
+// Contacts evaluated in batches, four per instruction, for the host one-pass force kernel
+// (kernels/contact_forces.hpp, compute_forces_by_slabs) and the law of the frictional peer
+// benchmark and the linear element tests: linear normal spring-dashpot with the constant
+// Coulomb tangential spring, no rolling.
+//
+// A slab's rows are read in order; the touching contacts of whole rows are gathered into a
+// batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
+// registers (GCC vector extensions in a function compiled for AVX; the rest of the build
+// stays portable, and the batch is used only where the processor reports AVX at run time),
+// and the forces are then scattered row by row in list order. Every lane performs exactly
+// the scalar law's operations in the scalar order (no contraction into FMA, branches
+// replaced by selecting between both outcomes), and the sums keep the scalar kernel's
+// order, so the trajectories are bitwise those of the scalar path, on any processor
+// (tests/test_contact_batch.cpp). Measured (perf/README.md): the frictional step gains
+// ~18 %; the frictionless law, whose evaluation is a few operations, loses to the gather
+// and scatter in two-lane SSE2 and in AVX, so it stays contact by contact.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <cmath>
+#include <cstring>
+#include <type_traits>
+
+#include "kernels/contact_model.hpp"
+
+#if defined(__GNUC__) && !defined(__CUDACC__) && !defined(__clang__) && defined(__x86_64__)
+#define GRANULAR_CONTACT_BATCH 1
+#define GRANULAR_AVX __attribute__((target("avx")))
+#define GRANULAR_AVX_INLINE __attribute__((target("avx"), always_inline)) inline
+#else
+#define GRANULAR_CONTACT_BATCH 0
+#endif
+
+namespace granular {
+
+// Which models have a batched evaluation (compile time), and whether this instance's
+// parameters allow it (run time: the Mindlin forms of the tangential spring do not).
+template <class Model>
+struct ContactBatchLaw {
+  static constexpr bool available = false;
+  static bool usable(const Model&) { return false; }
+};
+template <>
+struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
+  static constexpr bool available = GRANULAR_CONTACT_BATCH;
+  static bool usable(const ContactModel<LinearNormal, CoulombTangential>& m) {
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (m.tangential.table.p[a][b].law != CoulombTangential::Constant) return false;
+    return true;
+  }
+};
+
+#if GRANULAR_CONTACT_BATCH
+
+// Whether this processor (and its operating system) runs AVX instructions.
+inline bool cpu_has_avx() {
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx") != 0;
+  }();
+  return has;
+}
+
+// One batch of touching contacts, structure of arrays. Rows (the owner particle i and the
+// end of its contacts in the batch) are never split between batches.
+struct ContactBatch {
+  static constexpr int kCap = 64;  // contacts; a row with more owned entries goes scalar
+  static constexpr int kW = 4;     // lanes per vector: one AVX register
+  using V = double __attribute__((vector_size(32)));
+  using M = long __attribute__((vector_size(32)));
+
+  int n = 0, rows = 0;
+  int row_i[kCap], row_end[kCap];
+  int j[kCap], k[kCap];
+  // Inputs: geometry and relative motion, radii, spins, parameters, the spring.
+  alignas(32) double rx[kCap + kW], ry[kCap + kW], rz[kCap + kW], r2[kCap + kW];
+  alignas(32) double dv0[kCap + kW], dv1[kCap + kW], dv2[kCap + kW];
+  alignas(32) double ai[kCap + kW], aj[kCap + kW];
+  alignas(32) double wi0[kCap + kW], wi1[kCap + kW], wi2[kCap + kW];
+  alignas(32) double wj0[kCap + kW], wj1[kCap + kW], wj2[kCap + kW];
+  alignas(32) double kn[kCap + kW], gn[kCap + kW], kt[kCap + kW], gt[kCap + kW];
+  alignas(32) double mus[kCap + kW], mud[kCap + kW];
+  // Spring (in: stored, out: advanced) and outputs: force on i, torques on i and j.
+  alignas(32) double h0[kCap + kW], h1[kCap + kW], h2[kCap + kW];
+  alignas(32) double f0[kCap + kW], f1[kCap + kW], f2[kCap + kW];
+  alignas(32) double q0[kCap + kW], q1[kCap + kW], q2[kCap + kW];
+  alignas(32) double p0[kCap + kW], p1[kCap + kW], p2[kCap + kW];
+
+  GRANULAR_AVX_INLINE static V load(const double* a) {
+    V v;
+    std::memcpy(&v, a, sizeof v);
+    return v;
+  }
+  GRANULAR_AVX_INLINE static void store(double* a, V v) { std::memcpy(a, &v, sizeof v); }
+  GRANULAR_AVX_INLINE static V splat(double x) { return V{x, x, x, x}; }
+  GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return m ? a : b; }
+  // The correctly rounded square root of each lane, as the scalar law takes it.
+  GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
+
+  // Pads the last vector with copies of the last contact (evaluated, never scattered).
+  void pad() {
+    if (n == 0) return;
+    double* arrays[] = {rx,  ry,  rz,  r2, dv0, dv1, dv2, ai,  aj,  wi0, wi1, wi2,
+                        wj0, wj1, wj2, kn, gn,  kt,  gt,  mus, mud, h0,  h1,  h2};
+    for (double* a : arrays)
+      for (int c = n; c < (n + kW - 1) / kW * kW; ++c) a[c] = a[n - 1];
+  }
+
+  // Linear normal law and the constant Coulomb spring, rotated into the tangent plane, and
+  // the torques. The operations follow pair_geometry, LinearNormal::force,
+  // CoulombTangential::force (rotate_into_plane, coulomb_spring) and ContactModel::evaluate.
+  // Only where cpu_has_avx().
+  GRANULAR_AVX void evaluate(double dt) {
+    pad();
+    const V one = splat(1.0), zero = splat(0.0), half = splat(0.5), vdt = splat(dt);
+    for (int c = 0; c < n; c += kW) {
+      const V r = vsqrt(load(r2 + c));
+      const V inv = one / r;
+      const V n0 = load(rx + c) * inv, n1 = load(ry + c) * inv, n2 = load(rz + c) * inv;
+      const V a_i = load(ai + c), a_j = load(aj + c);
+      const V delta = a_i + a_j - r;
+      const V d0 = load(dv0 + c), d1 = load(dv1 + c), d2 = load(dv2 + c);
+      const V vn = d0 * n0 + d1 * n1 + d2 * n2;
+      const V fn = load(kn + c) * delta + load(gn + c) * -vn;
+      V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
+      {
+        const V li = a_i - half * delta, lj = a_j - half * delta;
+        const V aw0 = li * load(wi0 + c) + lj * load(wj0 + c);
+        const V aw1 = li * load(wi1 + c) + lj * load(wj1 + c);
+        const V aw2 = li * load(wi2 + c) + lj * load(wj2 + c);
+        const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
+        const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
+        // rotate_into_plane: an empty spring stays as it is.
+        V s0 = load(h0 + c), s1 = load(h1 + c), s2 = load(h2 + c);
+        const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
+        const M empty = len_sq == zero;
+        const V sn = s0 * n0 + s1 * n1 + s2 * n2;
+        const V x = sn * sn / sel(empty, one, len_sq);
+        const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
+        const M small = x < splat(1e-4);
+        const V exact = one / vsqrt(sel(small, one, one - x));
+        const V scale = sel(small, taylor, exact);
+        s0 = sel(empty, s0, (s0 - sn * n0) * scale);
+        s1 = sel(empty, s1, (s1 - sn * n1) * scale);
+        s2 = sel(empty, s2, (s2 - sn * n2) * scale);
+        s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
+        // coulomb_spring with k = kt, g = gt.
+        const V k = load(kt + c), g = load(gt + c), nk = -k;
+        V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
+        const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
+        const V afn = sel(fn < zero, -fn, fn);
+        const V limit = load(mus + c) * afn;
+        const M slides = f_sq > limit * limit;
+        const V fmag = vsqrt(f_sq);
+        const V slide = load(mud + c) * afn;
+        const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
+        const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
+        const M stiff = k > zero;
+        const V kk = sel(stiff, k, one);
+        s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
+        s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
+        s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
+        t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+        store(h0 + c, s0), store(h1 + c, s1), store(h2 + c, s2);
+        F0 += t0, F1 += t1, F2 += t2;
+        // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
+        const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
+        const V mli = -li, mlj = -lj;
+        store(q0 + c, mli * x0), store(q1 + c, mli * x1), store(q2 + c, mli * x2);
+        store(p0 + c, mlj * x0), store(p1 + c, mlj * x1), store(p2 + c, mlj * x2);
+      }
+      store(f0 + c, F0), store(f1 + c, F1), store(f2 + c, F2);
+    }
+  }
+};
+
+#endif  // GRANULAR_CONTACT_BATCH
+
+}  // namespace granular
