@@ -1,7 +1,8 @@
 """One chart of the linear and the Hertz element-test studies against the theories: K* and G*
 against phi Z for every preparation friction of both studies, with EMT (a curve per study:
 it depends on phi Z and k_t/k_n only) and the second-ring fluctuation theory with the
-measured chi (markers: it differs per configuration). Hertz moduli are shown normalised by
+measured chi (markers: it differs per configuration); for G also EMT with the k_t/k_n = 0.88
+the source's theory takes for Hertz (the Mindlin springs here give 0.593). Hertz moduli are shown normalised by
 the mean tangent stiffness dF/d(delta) (the engine's K* = K dbar / k_n, as the theories take
 it) and, open markers, by the secant stiffness F/delta = (2/3) of it, the source's choice.
 
@@ -44,6 +45,10 @@ for ax, m in zip(axes, ("K", "G")):
         o = np.argsort(x)
         ax.plot(x[o], t[m + "_emt"][sel][o], ls, color="k", lw=0.9,
                 label="EMT, %s (k_t/k_n %.3g)" % (name, t["kt_kn"][sel][0]))
+        if m == "G" and name == "Hertz":  # the source's theory takes k_t/k_n = 0.88
+            r = t["kt_kn"][sel][0]
+            ax.plot(x[o], t["G_emt"][sel][o] * (1 + 1.5 * 0.88) / (1 + 1.5 * r), ":",
+                    color="k", lw=0.9, label="EMT, Hertz with the source's k_t/k_n 0.88")
     ax.set_xlabel("phi Z")
     ax.set_ylabel(m + "* = " + m + " dbar / k_n (tangent)")
     ax.legend(fontsize=6, ncol=2)
