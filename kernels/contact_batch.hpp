@@ -50,16 +50,21 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
   }
 };
 
-#if GRANULAR_CONTACT_BATCH
-
-// Whether this processor (and its operating system) runs AVX instructions.
+// Whether this processor (and its operating system) runs AVX instructions (false where the
+// batch is not compiled).
 inline bool cpu_has_avx() {
+#if GRANULAR_CONTACT_BATCH
   static const bool has = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx") != 0;
   }();
   return has;
+#else
+  return false;
+#endif
 }
+
+#if GRANULAR_CONTACT_BATCH
 
 // One batch of touching contacts, structure of arrays. Rows (the owner particle i and the
 // end of its contacts in the batch) are never split between batches.

@@ -4,7 +4,9 @@
 //
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
-//                        [--out perf/results/dem_throughput_2t.json] [--no-triad]
+//                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
+// --no-batch evaluates frictional contacts one by one instead of in AVX batches
+// (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --no-triad skips the bandwidth measurement (its 768 MiB of arrays would also dominate the
 // peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
@@ -90,7 +92,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
-    bool triad = true;
+    bool triad = true, batched = true;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -116,6 +118,8 @@ int main(int argc, char** argv) {
         cache_dir = next();
       else if (a == "--no-triad")
         triad = false;
+      else if (a == "--no-batch")
+        batched = false;
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
@@ -133,6 +137,7 @@ int main(int argc, char** argv) {
         "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
+    result["batched_contacts"] = batched && cpu_has_avx();
     Json rows = Json::array();
 
     const std::vector<int> ns = data.empty() ? parse_sizes(sizes) : std::vector<int>{0};
@@ -169,8 +174,9 @@ int main(int argc, char** argv) {
           long builds = 0;
           double entries = 0;
           for (int r = 0; r < reps; ++r) {
-            DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model,
-                                       bench_params());
+            DemParams prm = bench_params();
+            prm.batched_contacts = batched;
+            DemSystem<Exec, Model> sys(Particles<Exec>::from_host(host), box, model, prm);
             if (r == 0) {
               const Measurements mi = sys.measure();
               z_initial = mi.z, ekin_initial = mi.ekin - mi.ekin_rot;
