@@ -102,6 +102,27 @@ struct ContactBatch {
   // The correctly rounded square root of each lane, as the scalar law takes it.
   GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
 
+  // Appends the touching contact of bi (the owner) with bj (partner j, list entry k) at
+  // separation (rx, ry, rz), |r|^2 = r2, in a flow of rate r3, with its pair's parameters
+  // and stored spring h; the relative velocity is formed as pair_geometry forms it.
+  template <class Body>
+  void push(const Body& bi, const Body& bj, int j_, int k_, double rx_, double ry_, double rz_,
+            double r2_, const double r3[3], const LinearNormal::Params& pn,
+            const CoulombTangential::Params& pt, const double* h) {
+    const int c = n++;
+    j[c] = j_, k[c] = k_;
+    rx[c] = rx_, ry[c] = ry_, rz[c] = rz_, r2[c] = r2_;
+    dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx_;
+    dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry_;
+    dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz_;
+    ai[c] = bi.a, aj[c] = bj.a;
+    wi0[c] = bi.w[0], wi1[c] = bi.w[1], wi2[c] = bi.w[2];
+    wj0[c] = bj.w[0], wj1[c] = bj.w[1], wj2[c] = bj.w[2];
+    kn[c] = pn.kn, gn[c] = pn.gn;
+    kt[c] = pt.kt, gt[c] = pt.gt, mus[c] = pt.mu_s, mud[c] = pt.mu_d;
+    h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
+  }
+
   // Pads the last vector with copies of the last contact (evaluated, never scattered).
   void pad() {
     if (n == 0) return;

@@ -368,24 +368,8 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
         continue;
       }
       const Body bj = load_body(hv, j, rot);
-      const int c = cb.n++;
-      cb.j[c] = j, cb.k[c] = k;
-      cb.rx[c] = rx, cb.ry[c] = ry, cb.rz[c] = rz, cb.r2[c] = r2;
-      // The relative velocity as pair_geometry forms it, with the affine flow.
-      cb.dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx;
-      cb.dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry;
-      cb.dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz;
-      cb.ai[c] = bi.a, cb.aj[c] = bj.a;
-      const auto& pn = m.normal.table(bi.s, bj.s);
-      cb.kn[c] = pn.kn, cb.gn[c] = pn.gn;
-      if constexpr (rot) {
-        cb.wi0[c] = bi.w[0], cb.wi1[c] = bi.w[1], cb.wi2[c] = bi.w[2];
-        cb.wj0[c] = bj.w[0], cb.wj1[c] = bj.w[1], cb.wj2[c] = bj.w[2];
-        const auto& pt = m.tangential.table(bi.s, bj.s);
-        cb.kt[c] = pt.kt, cb.gt[c] = pt.gt, cb.mus[c] = pt.mu_s, cb.mud[c] = pt.mu_d;
-        const double* h = hist + k * H;
-        cb.h0[c] = h[0], cb.h1[c] = h[1], cb.h2[c] = h[2];
-      }
+      cb.push(bi, bj, j, k, rx, ry, rz, r2, r3, m.normal.table(bi.s, bj.s),
+              m.tangential.table(bi.s, bj.s), hist + k * H);
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
   }

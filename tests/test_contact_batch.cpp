@@ -204,24 +204,13 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     if (c % 5 == 1) h = {0.3 * std::sin(u), -0.2, 0.1};
     if (c % 7 == 3) h = {s.n[0] * 1e-3 + 1e-4, s.n[1] * 1e-3, s.n[2] * 1e-3};
     if (c == 4) h = {0, 0, 0};
-    cb.j[c] = c, cb.k[c] = c;
-    cb.rx[c] = rx, cb.ry[c] = ry, cb.rz[c] = rz, cb.r2[c] = r2;
-    cb.dv0[c] = bi.v[0] - bj.v[0] + rate[0] * rx;
-    cb.dv1[c] = bi.v[1] - bj.v[1] + rate[1] * ry;
-    cb.dv2[c] = bi.v[2] - bj.v[2] + rate[2] * rz;
-    cb.ai[c] = bi.a, cb.aj[c] = bj.a;
-    cb.wi0[c] = bi.w[0], cb.wi1[c] = bi.w[1], cb.wi2[c] = bi.w[2];
-    cb.wj0[c] = bj.w[0], cb.wj1[c] = bj.w[1], cb.wj2[c] = bj.w[2];
     CoulombTangential::Params pt = model.tangential.table(bi.s, bj.s);
     if (c == 6) pt.kt = 0.0;              // no tangential stiffness
     if (c == 8) pt.mu_s = pt.mu_d = inf;  // never slides
     LinearNormal::Params pn = model.normal.table(bi.s, bj.s);
     if (c == 8 || c == 9) pn.kn = 0.0, pn.gn = 0.0;  // zero normal force
     if (c == 10) pn.kn = -1e3;                       // a tensile normal force
-    cb.kn[c] = pn.kn, cb.gn[c] = pn.gn;
-    cb.kt[c] = pt.kt, cb.gt[c] = pt.gt, cb.mus[c] = pt.mu_s, cb.mud[c] = pt.mu_d;
-    cb.h0[c] = h[0], cb.h1[c] = h[1], cb.h2[c] = h[2];
-    cb.n = c + 1;
+    cb.push(bi, bj, c, c, rx, ry, rz, r2, rate, pn, pt, h.data());
     // The scalar law with the same per-pair parameters.
     Friction one = model;
     one.normal.table.p[bi.s][bj.s] = pn;
