@@ -173,24 +173,34 @@ with open(tmp, "w") as f:
     f.write("\n".join(lines) + "\n")
 os.replace(tmp, outdir + "/table.md")
 
+def compact_legend(ax, names, styles):
+    """One legend entry per series (its colour) and one per quantity (marker and line style),
+    instead of one per drawn line: studies with many configurations stay readable."""
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color="C%d" % n, lw=2, label=name) for n, name in enumerate(names)]
+    handles += [Line2D([], [], color="k", marker=mk[0], ls=mk[1:], ms=4, label=label)
+                for mk, label in styles]
+    ax.legend(handles=handles, fontsize=6, ncol=2 if len(handles) > 10 else 1)
+
+
 if sweeps:
     fabric = all("fabric_dev_change_G" in sw for sw in sweeps.values())
+    names = sorted(sweeps)
     fig, axes = plt.subplots(1, 3 if fabric else 2, figsize=(15 if fabric else 10, 4))
     for n, (name, s) in enumerate(sorted(sweeps.items())):
         c = "C%d" % n
         for m, mk in (("K", "o-"), ("G", "s--"), ("M", "^:")):
-            axes[0].loglog(s["amplitude"], np.abs(s[m + "_star"]), mk, color=c, ms=4,
-                           label="%s* %s" % (m, name))
-        axes[1].loglog(s["amplitude"], s["eta_K"], "o-", color=c, ms=4, label="eta, " + name)
+            axes[0].loglog(s["amplitude"], np.abs(s[m + "_star"]), mk, color=c, ms=4)
+        axes[1].loglog(s["amplitude"], s["eta_K"], "o-", color=c, ms=4)
         if "reversal_residual" in s:
             axes[1].loglog(s["amplitude"], np.abs(s["reversal_residual"]), "x--", color=c,
-                           ms=5, label="|reversal residual|, " + name)
+                           ms=5)
     axes[0].set_xlabel("probe strain amplitude")
     axes[0].set_ylabel("secant modulus (dimensionless)")
-    axes[0].legend(fontsize=6)
+    compact_legend(axes[0], names, (("o-", "K*"), ("s--", "G*"), ("^:", "M*")))
     axes[1].set_xlabel("probe strain amplitude")
     axes[1].set_ylabel("isotropic probe: eta, |reversal residual|")
-    axes[1].legend(fontsize=6)
+    compact_legend(axes[1], names, (("o-", "eta"), ("x--", "|reversal residual|")))
     if fabric:  # how the contact network changes along the probe
         for n, (name, sw) in enumerate(sorted(sweeps.items())):
             c = "C%d" % n
@@ -199,11 +209,11 @@ if sweeps:
                                   ("fabric_dev_change_G", "^:", "d(F_xx-F_yy)/F_v shear")):
                 y = np.abs(sw[key])
                 ok = y > 0
-                axes[2].loglog(sw["amplitude"][ok], y[ok], mk, color=c, ms=4,
-                               label="%s, %s" % (what, name))
+                axes[2].loglog(sw["amplitude"][ok], y[ok], mk, color=c, ms=4)
         axes[2].set_xlabel("probe strain amplitude")
         axes[2].set_ylabel("|fabric change along the probe| / F_v")
-        axes[2].legend(fontsize=5)
+        compact_legend(axes[2], names, (("o-", "dF_v/F_v isotropic"), ("s--", "dF_v/F_v shear"),
+                                        ("^:", "d(F_xx-F_yy)/F_v shear")))
     save(fig, outdir, "moduli_vs_amplitude.png")
 
 sizes = np.unique(t["particles"])
