@@ -149,52 +149,50 @@ struct ContactBatch {
       const V vn = d0 * n0 + d1 * n1 + d2 * n2;
       const V fn = load(kn + c) * delta + load(gn + c) * -vn;
       V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
-      {
-        const V li = a_i - half * delta, lj = a_j - half * delta;
-        const V aw0 = li * load(wi0 + c) + lj * load(wj0 + c);
-        const V aw1 = li * load(wi1 + c) + lj * load(wj1 + c);
-        const V aw2 = li * load(wi2 + c) + lj * load(wj2 + c);
-        const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
-        const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
-        // rotate_into_plane: an empty spring stays as it is.
-        V s0 = load(h0 + c), s1 = load(h1 + c), s2 = load(h2 + c);
-        const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
-        const M empty = len_sq == zero;
-        const V sn = s0 * n0 + s1 * n1 + s2 * n2;
-        const V x = sn * sn / sel(empty, one, len_sq);
-        const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
-        const M small = x < splat(1e-4);
-        const V exact = one / vsqrt(sel(small, one, one - x));
-        const V scale = sel(small, taylor, exact);
-        s0 = sel(empty, s0, (s0 - sn * n0) * scale);
-        s1 = sel(empty, s1, (s1 - sn * n1) * scale);
-        s2 = sel(empty, s2, (s2 - sn * n2) * scale);
-        s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
-        // coulomb_spring with k = kt, g = gt.
-        const V k = load(kt + c), g = load(gt + c), nk = -k;
-        V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
-        const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
-        const V afn = sel(fn < zero, -fn, fn);
-        const V limit = load(mus + c) * afn;
-        const M slides = f_sq > limit * limit;
-        const V fmag = vsqrt(f_sq);
-        const V slide = load(mud + c) * afn;
-        const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
-        const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
-        const M stiff = k > zero;
-        const V kk = sel(stiff, k, one);
-        s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
-        s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
-        s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
-        t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
-        store(h0 + c, s0), store(h1 + c, s1), store(h2 + c, s2);
-        F0 += t0, F1 += t1, F2 += t2;
-        // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
-        const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
-        const V mli = -li, mlj = -lj;
-        store(q0 + c, mli * x0), store(q1 + c, mli * x1), store(q2 + c, mli * x2);
-        store(p0 + c, mlj * x0), store(p1 + c, mlj * x1), store(p2 + c, mlj * x2);
-      }
+      const V li = a_i - half * delta, lj = a_j - half * delta;
+      const V aw0 = li * load(wi0 + c) + lj * load(wj0 + c);
+      const V aw1 = li * load(wi1 + c) + lj * load(wj1 + c);
+      const V aw2 = li * load(wi2 + c) + lj * load(wj2 + c);
+      const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
+      const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
+      // rotate_into_plane: an empty spring stays as it is.
+      V s0 = load(h0 + c), s1 = load(h1 + c), s2 = load(h2 + c);
+      const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
+      const M empty = len_sq == zero;
+      const V sn = s0 * n0 + s1 * n1 + s2 * n2;
+      const V x = sn * sn / sel(empty, one, len_sq);
+      const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
+      const M small = x < splat(1e-4);
+      const V exact = one / vsqrt(sel(small, one, one - x));
+      const V scale = sel(small, taylor, exact);
+      s0 = sel(empty, s0, (s0 - sn * n0) * scale);
+      s1 = sel(empty, s1, (s1 - sn * n1) * scale);
+      s2 = sel(empty, s2, (s2 - sn * n2) * scale);
+      s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
+      // coulomb_spring with k = kt, g = gt.
+      const V k = load(kt + c), g = load(gt + c), nk = -k;
+      V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
+      const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
+      const V afn = sel(fn < zero, -fn, fn);
+      const V limit = load(mus + c) * afn;
+      const M slides = f_sq > limit * limit;
+      const V fmag = vsqrt(f_sq);
+      const V slide = load(mud + c) * afn;
+      const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
+      const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
+      const M stiff = k > zero;
+      const V kk = sel(stiff, k, one);
+      s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
+      s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
+      s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
+      t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+      store(h0 + c, s0), store(h1 + c, s1), store(h2 + c, s2);
+      F0 += t0, F1 += t1, F2 += t2;
+      // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
+      const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
+      const V mli = -li, mlj = -lj;
+      store(q0 + c, mli * x0), store(q1 + c, mli * x1), store(q2 + c, mli * x2);
+      store(p0 + c, mlj * x0), store(p1 + c, mlj * x1), store(p2 + c, mlj * x2);
       store(f0 + c, F0), store(f1 + c, F1), store(f2 + c, F2);
     }
   }

@@ -334,20 +334,17 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
           fi[d] += f[d];
           fh(j, d) -= f[d];
         }
-        if constexpr (rot) {
-          const double qa[3] = {cb.q0[c], cb.q1[c], cb.q2[c]};
-          const double qb[3] = {cb.p0[c], cb.p1[c], cb.p2[c]};
-          for (int d = 0; d < 3; ++d) {
-            qi[d] += qa[d];
-            qh(j, d) += qb[d];
-          }
-          double* h = hist + cb.k[c] * H;
-          h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
+        const double qa[3] = {cb.q0[c], cb.q1[c], cb.q2[c]};
+        const double qb[3] = {cb.p0[c], cb.p1[c], cb.p2[c]};
+        for (int d = 0; d < 3; ++d) {
+          qi[d] += qa[d];
+          qh(j, d) += qb[d];
         }
+        double* h = hist + cb.k[c] * H;
+        h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
       }
       for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
-      if constexpr (rot)
-        for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
+      for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
     }
     cb.n = cb.rows = 0;
   };
