@@ -102,7 +102,7 @@ struct ContactBatch {
   // The correctly rounded square root of each lane, as the scalar law takes it.
   GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
 
-  // Appends the touching contact of bi (the owner) with bj (partner j, list entry k) at
+  // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
   // separation (rx, ry, rz), |r|^2 = r2, in a flow of rate r3, with its pair's parameters
   // and stored spring h; the relative velocity is formed as pair_geometry forms it.
   template <class Body>

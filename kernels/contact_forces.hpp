@@ -134,7 +134,7 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
                          const Hook& pair_hook = Hook()) {
   const ParticleViews<ExecSpace> pv(p);
   auto offsets = nl.offsets(), neighbors = nl.neighbors();
-  auto owned_end = nl.owned_end();
+  auto owned_end = nl.owned_end(), pair_begin = nl.pair_begin();
   const PeriodicBox b = box;
   const Model m = model;
   const Hook hook = pair_hook;
@@ -147,12 +147,14 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
         constexpr bool rot = Model::rotations;
         constexpr int NB = rot ? 9 : 3;
         (void)history.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
+        (void)pair_begin.extent(0);
         (void)hook;
         (void)m;
         (void)dt;
         const double r3[3] = {rate[0], rate[1], rate[2]};
         const Body bi = load_body(pv, i, rot);
-        for (int k = offsets(i); k < owned_end(i); ++k) {  // the contacts i owns
+        const int row0 = H > 0 ? pair_begin(i) - offsets(i) : 0;  // history row of entry k
+        for (int k = offsets(i); k < owned_end(i); ++k) {         // the contacts i owns
           const int j = neighbors(k);
           double rx, ry, rz, r2;
           if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
@@ -161,9 +163,9 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
             for (int c = 0; c < NB; ++c) pair(k, c) = 0.0;
             if constexpr (H > 0) {
               bool stale = false;
-              for (int c = 0; c < H; ++c) stale = stale || history(k, c) != 0.0;
+              for (int c = 0; c < H; ++c) stale = stale || history(row0 + k, c) != 0.0;
               if (stale)
-                for (int c = 0; c < H; ++c) history(k, c) = 0.0;
+                for (int c = 0; c < H; ++c) history(row0 + k, c) = 0.0;
             }
             if constexpr (Hook::active) hook.apart(k);
             continue;
@@ -172,14 +174,14 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
           pair_geometry(bi, load_body(pv, j, rot), rx, ry, rz, r2, r3, rot, s);
           double h[H > 0 ? H : 1];
           if constexpr (H > 0)
-            for (int c = 0; c < H; ++c) h[c] = history(k, c);
+            for (int c = 0; c < H; ++c) h[c] = history(row0 + k, c);
           PairForce out;
           if constexpr (Hook::active)
             hook.evaluate(m, k, s, dt, h, out);
           else
             m.evaluate(s, dt, h, out);
           if constexpr (H > 0)
-            for (int c = 0; c < H; ++c) history(k, c) = h[c];
+            for (int c = 0; c < H; ++c) history(row0 + k, c) = h[c];
           for (int d = 0; d < 3; ++d) pair(k, d) = out.f[d];
           if constexpr (rot)
             for (int d = 0; d < 3; ++d) pair(k, 3 + d) = out.q[d], pair(k, 6 + d) = out.qj[d];
@@ -249,6 +251,17 @@ struct HostParticleViews {
         species{p.species.data()} {}
 };
 
+// The neighbour list's rows for the host kernel (raw pointers, as HostParticleViews).
+struct HostListRows {
+  HostArray<const int> offsets, owned_end, neighbors, pair_begin;
+  template <class ExecSpace>
+  explicit HostListRows(const NeighborList<ExecSpace>& nl)
+      : offsets{nl.offsets().data()},
+        owned_end{nl.owned_end().data()},
+        neighbors{nl.neighbors().data()},
+        pair_begin{nl.pair_begin().data()} {}
+};
+
 // A contact that is apart forgets its history. Most such slots are already zero: reading is
 // cheaper than rewriting them every step.
 template <int H>
@@ -263,34 +276,34 @@ KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
 
 // One owner row of the one-pass kernel below: particle i evaluates the contacts it owns,
 // adds their forces to itself and scatters the reactions to its partners.
+// `hist` holds the owners' rows (NeighborList::pair_begin).
 template <class Model>
 KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const PeriodicBox& b,
-                                              const Model& m, const HostArray<const int>& offsets,
-                                              const HostArray<const int>& owned_end,
-                                              const HostArray<const int>& neighbors, double* hist,
-                                              const HostVec3& fh, const HostVec3& qh,
+                                              const Model& m, const HostListRows& list,
+                                              double* hist, const HostVec3& fh, const HostVec3& qh,
                                               const double r3[3], double dt, int i) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
   const Body bi = load_body(hv, i, rot);
   double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
-  const int kend = owned_end(i);
-  for (int k = offsets(i); k < kend; ++k) {
-    const int j = neighbors(k);
+  const int kbeg = list.offsets(i), kend = list.owned_end(i);
+  const int row0 = H > 0 ? list.pair_begin(i) - kbeg : 0;  // history row of entry k
+  for (int k = kbeg; k < kend; ++k) {
+    const int j = list.neighbors(k);
     double rx, ry, rz, r2;
     if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-      forget_history<H>(hist, k);
+      forget_history<H>(hist, row0 + k);
       continue;
     }
     PairState s;
     pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
     double h[H > 0 ? H : 1];
     if (H > 0)
-      for (int c = 0; c < H; ++c) h[c] = hist[k * H + c];
+      for (int c = 0; c < H; ++c) h[c] = hist[(row0 + k) * H + c];
     PairForce out;
     m.evaluate(s, dt, h, out);
     if (H > 0)
-      for (int c = 0; c < H; ++c) hist[k * H + c] = h[c];
+      for (int c = 0; c < H; ++c) hist[(row0 + k) * H + c] = h[c];
     for (int d = 0; d < 3; ++d) {
       fi[d] += out.f[d];
       fh(j, d) -= out.f[d];
@@ -312,9 +325,7 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
 // row in list order. Bitwise the results of one_pass_row.
 template <class Model>
 void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, const Model& m,
-                           const HostArray<const int>& offsets,
-                           const HostArray<const int>& owned_end,
-                           const HostArray<const int>& neighbors, const HostArray<const int>& order,
+                           const HostListRows& list, const HostArray<const int>& order,
                            double* hist, const HostVec3& fh, const HostVec3& qh, const double r3[3],
                            double dt, int q_begin, int q_end) {
   constexpr int H = Model::history;
@@ -340,7 +351,7 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
           qi[d] += qa[d];
           qh(j, d) += qb[d];
         }
-        double* h = hist + cb.k[c] * H;
+        double* h = hist + cb.k[c] * H;  // the contact's history row
         h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
       }
       for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
@@ -350,23 +361,24 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
   };
   for (int q = q_begin; q < q_end; ++q) {
     const int i = order(q);
-    const int kbeg = offsets(i), kend = owned_end(i);
+    const int kbeg = list.offsets(i), kend = list.owned_end(i);
     if (cb.rows == ContactBatch::kCap || cb.n + (kend - kbeg) > ContactBatch::kCap) flush();
     if (kend - kbeg > ContactBatch::kCap) {  // a crowded row: evaluated on its own
-      one_pass_row(hv, b, m, offsets, owned_end, neighbors, hist, fh, qh, r3, dt, i);
+      one_pass_row(hv, b, m, list, hist, fh, qh, r3, dt, i);
       continue;
     }
     const Body bi = load_body(hv, i, rot);
+    const int row0 = list.pair_begin(i) - kbeg;  // history row of entry k
     for (int k = kbeg; k < kend; ++k) {
-      const int j = neighbors(k);
+      const int j = list.neighbors(k);
       double rx, ry, rz, r2;
       if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-        forget_history<H>(hist, k);
+        forget_history<H>(hist, row0 + k);
         continue;
       }
       const Body bj = load_body(hv, j, rot);
-      cb.push(bi, bj, j, k, rx, ry, rz, r2, r3, m.normal.table(bi.s, bj.s),
-              m.tangential.table(bi.s, bj.s), hist + k * H);
+      cb.push(bi, bj, j, row0 + k, rx, ry, rz, r2, r3, m.normal.table(bi.s, bj.s),
+              m.tangential.table(bi.s, bj.s), hist + (row0 + k) * H);
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
   }
@@ -393,8 +405,7 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
   const HostParticleViews hv(p);
   auto f = p.f, torque = p.torque;
   const HostVec3 fh{p.f.data()}, qh{p.torque.data()};
-  const HostArray<const int> offsets{nl.offsets().data()}, neighbors{nl.neighbors().data()};
-  const HostArray<const int> owned_end{nl.owned_end().data()};
+  const HostListRows list(nl);
   const HostArray<const int> order{nl.cell_order().data()}, slab_begin{nl.slab_begin().data()};
   double* const hist = history.data();
   const PeriodicBox b = box;
@@ -421,8 +432,8 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
         const int tasks = (slabs - r + rounds - 1) / rounds;
         Kokkos::parallel_for("dem::compute_forces::slabs", Policy(0, tasks), [=](const int t) {
           const int slab = t * rounds + r;
-          one_pass_rows_batched(hv, b, m, offsets, owned_end, neighbors, order, hist, fh, qh, rate,
-                                dt, slab_begin(slab), slab_begin(slab + 1));
+          one_pass_rows_batched(hv, b, m, list, order, hist, fh, qh, rate, dt, slab_begin(slab),
+                                slab_begin(slab + 1));
         });
       }
       return;
@@ -438,7 +449,7 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
           const int slab = t * rounds + r;
           const double r3[3] = {rate[0], rate[1], rate[2]};
           for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q)
-            one_pass_row(hv, b, m, offsets, owned_end, neighbors, hist, fh, qh, r3, dt, order(q));
+            one_pass_row(hv, b, m, list, hist, fh, qh, r3, dt, order(q));
         });
   }
 }

@@ -1,7 +1,7 @@
 // What a contact model sees of one pair (geometry, relative motion, species) and the
 // species-pair parameter table every model carries. Vector helpers are written so that
-// swapping i and j negates results exactly, which keeps the two copies of a contact's
-// history in the full neighbour list exact mirror images.
+// swapping i and j negates results exactly: a pair seen from either side (measurements
+// walk both entries of the full list) gives exactly opposite vectors.
 #pragma once
 #include <Kokkos_Core.hpp>
 

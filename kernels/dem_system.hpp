@@ -177,7 +177,7 @@ class DemSystem {
       permute_rows<ExecSpace>(wall_record_, order, p_.n);
       mc_.reorder(order, p_.n);
     }
-    nl_.build(p_, box_);
+    nl_.build(p_, box_, params_.sort);
     history_.remap(p_, nl_, order);
     size_pair_buffer(two_pass());
     mc_.after_build(p_, nl_, order, pair_.extent(0));
@@ -199,7 +199,8 @@ class DemSystem {
       }
     return m;
   }
-  // Per-contact history rows, aligned with the neighbour list (empty for models without).
+  // Per-contact history, one row per contact in its owner's rows (NeighborList::pair_begin;
+  // empty for models without).
   typename ContactHistory<ExecSpace, Model::history>::values_view history_view() const {
     if constexpr (Model::history > 0)
       return history_.values();
@@ -299,7 +300,7 @@ class DemSystem {
       throw InputError("restart group " + g + " holds another number of particles");
     p_ = q;
     nl_.load(in, g + "/neighbor_list");
-    history_.load(in, g + "/history");
+    history_.load(in, g + "/history", nl_);
     load_view(in, g + "/walls/history", wall_history_);
     load_view(in, g + "/walls/record", wall_record_);
     time_ = s[0], steps_ = static_cast<long>(s[1]), particle_volume_ = s[2];
@@ -319,7 +320,9 @@ class DemSystem {
   bool two_pass() const {
     return params_.two_pass_forces || mc_.active() || !forces_by_slabs<ExecSpace>();
   }
+  // The list's mirror index serves the same kernel only.
   void size_pair_buffer(bool needed) {
+    nl_.keep_mirror(needed);
     if (!needed) {
       pair_ = pair_view();
       return;
@@ -414,7 +417,7 @@ class DemSystem {
   long steps_ = 0;
   double particle_volume_ = 0.0;
   double a_min_ = 1e300, a_max_ = 0.0;
-  ContactHistory<ExecSpace, Model::history> history_;
+  ContactHistory<ExecSpace, Model::history, true> history_;
   typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history",
                                                                                  1, 1};
   StepProfile* profile_ = nullptr;

@@ -45,8 +45,8 @@ struct ParticleMeasure {
   ParticleViews<ExecSpace> pv;
   typename Particles<ExecSpace>::vec_view v, w;
   typename Particles<ExecSpace>::scalar_view mass, inertia;
-  typename NeighborList<ExecSpace>::int_view offsets, neighbors, mirror, owned_end;
-  HistoryView history;
+  typename NeighborList<ExecSpace>::int_view offsets, neighbors, owned_end, pair_begin;
+  HistoryView history;  // owners' rows (NeighborList::pair_begin)
   PeriodicBox b;
   Model m;
   int thr;
@@ -63,7 +63,13 @@ struct ParticleMeasure {
       // stress and energy of a pair are the same seen from either side.
       const int j = neighbors(k);
       const bool own = k < owned_end(i);  // owned entries come first in each row
-      const int a = own ? i : j, c2 = own ? j : i, slot = own ? k : mirror(k);
+      const int a = own ? i : j, c2 = own ? j : i;
+      int q = k;  // the owner's entry of the pair (the list is symmetric: j owns one for i)
+      if (!own) {
+        q = offsets(j);
+        while (q + 1 < owned_end(j) && neighbors(q) != i) ++q;
+      }
+      const int slot = pair_begin(a) + (q - offsets(a));
       PairState s;
       if (!pair_state(pv, b, zero, Model::rotations, a, c2, s)) continue;
       double h[H > 0 ? H : 1];
@@ -121,8 +127,8 @@ Measurements measure(const Particles<ExecSpace>& p, const NeighborList<ExecSpace
                                                           p.inertia,
                                                           nl.offsets(),
                                                           nl.neighbors(),
-                                                          nl.mirror(),
                                                           nl.owned_end(),
+                                                          nl.pair_begin(),
                                                           history,
                                                           box,
                                                           model,

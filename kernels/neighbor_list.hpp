@@ -3,8 +3,9 @@
 // Full list (each pair stored for both particles) so that every particle sums its own
 // forces in a fixed order: no atomics, and results that are bitwise identical for any
 // thread count and on any backend. Each contact is computed once, by its owner (the lower
-// identity), and gathered by both through the mirror entry. The order inside a cell is
-// sorted by particle identity for the same reason.
+// identity); the device's two passes gather it for both through the mirror entry, the host's
+// one pass adds it to both at once. Per-contact data lives in the owners' rows only
+// (pair_begin). The order inside a cell is sorted by particle identity for the same reason.
 //
 // The list is rebuilt only when it may have become wrong: some particle moved more than
 // half the skin since the build, counting both its own motion and the affine shrinking of
@@ -89,12 +90,26 @@ class NeighborList {
   const int_view& offsets() const { return offsets_; }      // n + 1
   const int_view& neighbors() const { return neighbors_; }  // offsets(n)
   // For entry k = (i, j): the entry (j, i). Lets the pair owner (i < j) compute a contact
-  // once and both particles gather it in a fixed order.
+  // once and both particles gather it in a fixed order (the two-pass force kernel). Kept
+  // only while keep_mirror(true) (the default); the host's one-pass kernel does without.
   const int_view& mirror() const { return mirror_; }
+  // Whether builds make mirror(); turning it on completes the current list's at once.
+  void keep_mirror(bool on) {
+    keep_mirror_ = on;
+    if (!on)
+      mirror_ = int_view(), mirror_valid_ = false;
+    else if (!mirror_valid_ && offsets_.extent(0) > 0)
+      build_mirror(static_cast<int>(owned_end_.extent(0)));
+  }
   // Each particle's entries come owned first: entries offsets(i) .. owned_end(i) - 1 are the
   // partners with a higher identity (contacts i owns), the rest those with a lower one. The
   // force loops then need no identity look-ups to tell them apart.
   const int_view& owned_end() const { return owned_end_; }  // n
+  // Rows of the per-pair data kept only by owners (contact history): the contacts particle
+  // i owns take rows pair_begin(i) .. pair_begin(i + 1) - 1, in the order of its owned
+  // entries: owned entry k has row pair_begin(i) + k - offsets(i). Half the list's rows.
+  const int_view& pair_begin() const { return pair_begin_; }  // n + 1
+  int num_pairs() const { return num_pairs_; }
   // Particles in cell order (cells in z, y, x lexicographic order; identity order inside a
   // cell): particles of a cell and of its x-neighbours sit close in memory.
   const int_view& cell_order() const { return cell_particles_; }
@@ -107,7 +122,10 @@ class NeighborList {
   int num_slabs() const { return num_slabs_; }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.
-  void build(const Particles<ExecSpace>& p, const PeriodicBox& box);
+  // `in_cell_order`: the caller has just called bin() on these positions and put the
+  // particles in cell_order() (DemSystem's sorting); the cells are then relabelled instead
+  // of binned again (the same cells and order: particle q of the new order is q-th in them).
+  void build(const Particles<ExecSpace>& p, const PeriodicBox& box, bool in_cell_order = false);
   // Only the binning step of build: fills cell_order().
   void bin(const Particles<ExecSpace>& p, const PeriodicBox& box);
 
@@ -128,7 +146,7 @@ class NeighborList {
   void save(H5Writer& out, const std::string& g) const {
     save_view(out, g + "/offsets", offsets_);
     save_view(out, g + "/neighbors", neighbors_);
-    save_view(out, g + "/mirror", mirror_);
+    if (mirror_valid_) save_view(out, g + "/mirror", mirror_);
     save_view(out, g + "/owned_end", owned_end_);
     save_view(out, g + "/x_ref", x_ref_);
     // The slabs fix the summation order of the one-pass force kernel.
@@ -141,7 +159,11 @@ class NeighborList {
   void load(const H5Reader& in, const std::string& g) {
     load_view(in, g + "/offsets", offsets_);
     load_view(in, g + "/neighbors", neighbors_);
-    load_view(in, g + "/mirror", mirror_);
+    mirror_valid_ = in.has(g + "/mirror");
+    if (mirror_valid_)
+      load_view(in, g + "/mirror", mirror_);
+    else
+      mirror_ = int_view();
     load_view(in, g + "/owned_end", owned_end_);
     load_view(in, g + "/x_ref", x_ref_);
     if (!in.has(g + "/cell_order") || !in.has(g + "/slab_begin"))
@@ -155,7 +177,14 @@ class NeighborList {
     if (s.size() != 6) throw InputError("restart group " + g + " has a malformed list");
     num_entries_ = static_cast<int>(s[0]), builds_ = static_cast<long>(s[1]), a_max_ = s[2];
     for (int d = 0; d < 3; ++d) built_len_[d] = s[3 + d];
+    index_pairs(static_cast<int>(owned_end_.extent(0)));  // follows from the rows
+    keep_mirror(keep_mirror_);
   }
+
+  // Public only because nvcc rejects extended lambdas in private member functions.
+  void index_pairs(int n);
+  void relabel_cells(int n);
+  void build_mirror(int n);
 
  private:
   double skin_;
@@ -163,13 +192,14 @@ class NeighborList {
   long builds_ = 0;
   double a_max_ = 0.0;
   double built_len_[3] = {1, 1, 1};
-  int_view offsets_, neighbors_, mirror_, owned_end_;
+  int_view offsets_, neighbors_, mirror_, owned_end_, pair_begin_;
+  int num_pairs_ = 0;
+  bool keep_mirror_ = true, mirror_valid_ = false;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
   int_view slab_begin_;
   int num_slabs_ = 0;
   static constexpr int kMaxScratch = 64;
   int scratch_cap_ = 24;
-  int_view scratch_;
   int nc_[3] = {1, 1, 1};
   typename Particles<ExecSpace>::vec_view x_ref_;
 };
@@ -295,8 +325,26 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
 }
 
 template <class ExecSpace>
-void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const PeriodicBox& box) {
-  bin(p, box);
+void NeighborList<ExecSpace>::relabel_cells(int n) {
+  if (static_cast<int>(cell_of_.extent(0)) != n)
+    throw std::logic_error("NeighborList::build(in_cell_order) without a bin() before it");
+  auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
+  const int ncells = static_cast<int>(cell_start.extent(0)) - 1;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::relabel", Kokkos::RangePolicy<ExecSpace>(0, ncells),
+      KOKKOS_LAMBDA(const int c) {
+        for (int q = cell_start(c); q < cell_start(c + 1); ++q)
+          cell_of(q) = c, cell_particles(q) = q;
+      });
+}
+
+template <class ExecSpace>
+void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const PeriodicBox& box,
+                                    bool in_cell_order) {
+  if (in_cell_order)
+    relabel_cells(p.n);
+  else
+    bin(p, box);
   const int n = p.n;
   auto x = p.x;
   auto radius = p.radius;
@@ -313,10 +361,11 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   auto offsets = offsets_;
   auto owned_end = owned_end_;
   auto id = p.id;
+  // The scratch lives only through the build: kept, it would add n x cap to the peak
+  // memory when the contact history is remapped (old and new rows side by side) right after.
   const int cap = scratch_cap_;
-  if (scratch_.extent(0) < static_cast<size_t>(n) * cap)
-    scratch_ = int_view("neighbor::scratch", static_cast<size_t>(n) * cap);
-  auto scratch = scratch_;
+  int_view scratch(Kokkos::view_alloc("neighbor::scratch", Kokkos::WithoutInitializing),
+                   static_cast<size_t>(n) * cap);
   int most = 0;
   Kokkos::parallel_reduce(
       "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
@@ -344,12 +393,9 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
       },
       total);
   num_entries_ = total;
-  if (static_cast<int>(neighbors_.extent(0)) < total) {
+  if (static_cast<int>(neighbors_.extent(0)) < total)
     neighbors_ = int_view("neighbor::neighbors", total + total / 8 + 16);
-    mirror_ = int_view("neighbor::mirror", total + total / 8 + 16);
-  }
   auto neighbors = neighbors_;
-  auto mirror = mirror_;
   if (most <= cap) {
     Kokkos::parallel_for(
         "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
@@ -385,6 +431,19 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   // Room for a little growth; a list with a few crowded particles (large ones among small)
   // keeps the bounded scratch and sweeps twice rather than hold n x (largest count).
   scratch_cap_ = most + most / 4 + 2 <= kMaxScratch ? std::max(cap, most + most / 4 + 2) : cap;
+  mirror_valid_ = false;
+  if (keep_mirror_) build_mirror(n);
+  index_pairs(n);
+  Kokkos::deep_copy(x_ref_, x);
+  for (int d = 0; d < 3; ++d) built_len_[d] = box.len[d];
+  ++builds_;
+}
+
+template <class ExecSpace>
+void NeighborList<ExecSpace>::build_mirror(int n) {
+  if (mirror_.extent(0) < neighbors_.extent(0))
+    mirror_ = int_view("neighbor::mirror", neighbors_.extent(0));
+  auto offsets = offsets_, owned_end = owned_end_, neighbors = neighbors_, mirror = mirror_;
   Kokkos::parallel_for(
       "neighbor::NeighborList::mirror", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
@@ -403,10 +462,23 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
           mirror(k) = m;  // the list is symmetric by construction, so m is always found
         }
       });
+  mirror_valid_ = true;
+}
 
-  Kokkos::deep_copy(x_ref_, x);
-  for (int d = 0; d < 3; ++d) built_len_[d] = box.len[d];
-  ++builds_;
+template <class ExecSpace>
+void NeighborList<ExecSpace>::index_pairs(int n) {
+  if (static_cast<int>(pair_begin_.extent(0)) != n + 1)
+    pair_begin_ = int_view("neighbor::pair_begin", n + 1);
+  auto offsets = offsets_, owned_end = owned_end_, pair_begin = pair_begin_;
+  int total = 0;
+  Kokkos::parallel_scan(
+      "neighbor::NeighborList::pair_scan", Kokkos::RangePolicy<ExecSpace>(0, n + 1),
+      KOKKOS_LAMBDA(const int i, int& acc, const bool final) {
+        if (final) pair_begin(i) = acc;
+        if (i < n) acc += owned_end(i) - offsets(i);
+      },
+      total);
+  num_pairs_ = total;
 }
 
 }  // namespace granular

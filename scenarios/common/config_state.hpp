@@ -73,12 +73,14 @@ ConfigState snapshot(const System& sys, const std::vector<double>& density, doub
     auto off = Kokkos::create_mirror_view_and_copy(h, nl.offsets());
     auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
     auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
+    auto pb = Kokkos::create_mirror_view_and_copy(h, nl.pair_begin());
     std::vector<std::pair<std::pair<int, int>, int>> rows;
     for (int i = 0; i < n; ++i)
-      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns
+      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns, in its history rows
+        const int r = pb(i) + (k - off(i));
         bool any = false;
-        for (int q = 0; q < H; ++q) any = any || hist(k, q) != 0.0;
-        if (any) rows.push_back({{id(i), id(nb(k))}, k});
+        for (int q = 0; q < H; ++q) any = any || hist(r, q) != 0.0;
+        if (any) rows.push_back({{id(i), id(nb(k))}, r});
       }
     std::sort(rows.begin(), rows.end());
     for (const auto& [pair, k] : rows) {
@@ -119,14 +121,16 @@ void restore_history(System& sys, const ConfigState& c) {
     auto off = Kokkos::create_mirror_view_and_copy(h, nl.offsets());
     auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
     auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
+    auto pb = Kokkos::create_mirror_view_and_copy(h, nl.pair_begin());
     auto id = Kokkos::create_mirror_view_and_copy(h, sys.particles().id);
     Kokkos::deep_copy(hist, 0.0);
     size_t restored = 0;
     for (int i = 0; i < sys.particles().n; ++i)
-      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns
+      for (int k = off(i); k < own(i); ++k) {  // the contacts i owns, in its history rows
         const auto it = row.find({id(i), id(nb(k))});
         if (it == row.end()) continue;
-        for (int q = 0; q < H; ++q) hist(k, q) = c.history[static_cast<size_t>(it->second) * H + q];
+        const int r = pb(i) + (k - off(i));
+        for (int q = 0; q < H; ++q) hist(r, q) = c.history[static_cast<size_t>(it->second) * H + q];
         ++restored;
       }
     if (restored != c.pair_i.size())

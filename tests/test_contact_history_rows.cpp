@@ -1,0 +1,143 @@
+// Contact history kept in the owners' rows only (ContactHistory with OwnerRows,
+// NeighborList::pair_begin): after a compression and a shear with rebuilds and particle
+// reordering, every touching contact's spring sits in the row of its owned entry (it lies in
+// that contact's tangent plane, as the law keeps it) and every apart pair's row is empty;
+// the rows are exactly half the list. A restart written with one history row per list
+// entry (the earlier layout) loads into the owner rows bitwise.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <utility>
+
+#include "core/output.hpp"
+#include "exec_spaces.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/packing.hpp"
+#include "tests/test_support.hpp"
+
+using namespace granular;
+
+namespace {
+
+using Friction = ContactModel<LinearNormal, CoulombTangential>;
+
+template <class Exec>
+DemSystem<Exec, Friction> sheared_packing() {
+  GasSpec g;
+  g.count = 1200, g.diameter_min = 1, g.diameter_max = 2, g.density = 2000, g.phi = 0.35;
+  g.speed = 0.01, g.seed = 5;
+  PeriodicBox box;
+  const HostParticles h = random_gas(g, box);
+  DemParams prm;
+  prm.dt = 0.003, prm.skin = 0.1, prm.damping.translational = 100;
+  prm.damping.rotational = 20;
+  const Friction model{
+      LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.5), {}};
+  DemSystem<Exec, Friction> sys(Particles<Exec>::from_host(h), box, model, prm);
+  sys.set_strain_rate(-3e-2, -3e-2, -3e-2);  // to phi ~ 0.63: a loaded packing
+  sys.step(2000);
+  sys.set_strain_rate(1e-1, -1e-1, 0);  // shear: springs load, some slide
+  sys.step(300);
+  return sys;
+}
+
+template <class V>
+auto on_host(const V& v) {
+  return Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+}
+
+}  // namespace
+
+template <class T>
+class ContactHistoryRowsTest : public ::testing::Test {};
+TYPED_TEST_SUITE(ContactHistoryRowsTest, granular::testing::ExecSpaces);
+
+TYPED_TEST(ContactHistoryRowsTest, EachContactsSpringSitsInItsOwnersRowThroughRebuilds) {
+  using Exec = TypeParam;
+  auto sys = sheared_packing<Exec>();
+  const auto& nl = sys.neighbor_list();
+  ASSERT_GT(nl.builds(), 3) << "the springs must survive rebuilds and reordering";
+  ASSERT_EQ(2 * nl.num_pairs(), nl.num_entries()) << "the list holds each pair twice";
+  const auto hist = on_host(sys.history_view());
+  ASSERT_EQ(static_cast<int>(hist.extent(0)), nl.num_pairs());
+  const auto off = on_host(nl.offsets()), own = on_host(nl.owned_end());
+  const auto pb = on_host(nl.pair_begin()), nb = on_host(nl.neighbors());
+  const auto x = on_host(sys.particles().x), a = on_host(sys.particles().radius);
+  const PeriodicBox box = sys.box();
+  int touching = 0, loaded = 0;
+  for (int i = 0; i < sys.particles().n; ++i) {
+    ASSERT_EQ(pb(i + 1) - pb(i), own(i) - off(i));
+    for (int k = off(i); k < own(i); ++k) {
+      const int j = nb(k), r = pb(i) + (k - off(i));
+      double n[3], d2 = 0;
+      for (int c = 0; c < 3; ++c) n[c] = box.min_image(x(i, c) - x(j, c), c), d2 += n[c] * n[c];
+      const double s2 = hist(r, 0) * hist(r, 0) + hist(r, 1) * hist(r, 1) + hist(r, 2) * hist(r, 2);
+      const double gap = std::sqrt(d2) - a(i) - a(j);
+      // Positions moved by one drift since the forces were evaluated: decide on clear cases.
+      if (gap > 1e-6) {
+        EXPECT_EQ(s2, 0.0) << "apart pair " << i << "-" << j << " keeps a spring";
+      } else if (gap < -1e-6) {
+        ++touching;
+        if (s2 == 0.0) continue;
+        ++loaded;
+        const double dn =
+            (hist(r, 0) * n[0] + hist(r, 1) * n[1] + hist(r, 2) * n[2]) / std::sqrt(d2);
+        // Rotated into the tangent plane at the last evaluation; the normal has turned by
+        // at most one step's rotation since.
+        EXPECT_LT(std::abs(dn), 1e-3 * std::sqrt(s2))
+            << "spring of " << i << "-" << j << " is not in its tangent plane";
+      }
+    }
+  }
+  EXPECT_GT(touching, sys.particles().n) << "too few contacts for the check to bite";
+  EXPECT_GT(loaded, touching / 2) << "the shear must load most springs";
+}
+
+TYPED_TEST(ContactHistoryRowsTest, RestartWithOneRowPerListEntryLoadsIntoOwnerRowsBitwise) {
+  using Exec = TypeParam;
+  auto sys = sheared_packing<Exec>();
+  const auto& nl = sys.neighbor_list();
+  const auto hist = on_host(sys.history_view());
+  const auto off = on_host(nl.offsets()), own = on_host(nl.owned_end());
+  const auto pb = on_host(nl.pair_begin()), nb = on_host(nl.neighbors());
+  const auto id = on_host(sys.particles().id);
+  const int n = sys.particles().n, entries = nl.num_entries();
+  // The earlier layout: row k for list entry k (the owner's entries hold the springs, the
+  // other side's rows zero), partner identities per entry, the list's offsets.
+  Kokkos::View<double**, Kokkos::LayoutRight, Kokkos::HostSpace> values("values", entries, 3);
+  Kokkos::View<int*, Kokkos::HostSpace> ids("ids", entries);
+  for (int i = 0; i < n; ++i)
+    for (int k = off(i); k < off(i + 1); ++k) {
+      ids(k) = id(nb(k));
+      if (k < own(i))
+        for (int c = 0; c < 3; ++c) values(k, c) = hist(pb(i) + (k - off(i)), c);
+    }
+  const auto dir = granular::testing::unique_temp_path("granular_history_rows");
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "old.h5").string();
+  {
+    H5Writer w(path);
+    save_view(w, "/h/values", values);
+    save_view(w, "/h/partner_ids", ids);
+    save_view(w, "/h/offsets", off);
+    w.commit();
+  }
+  ContactHistory<Exec, 3, true> loaded;
+  loaded.load(H5Reader(path), "/h", nl);
+  const auto got = on_host(loaded.values());
+  ASSERT_EQ(got.extent(0), hist.extent(0));
+  EXPECT_EQ(std::memcmp(got.data(), hist.data(), hist.size() * sizeof(double)), 0);
+  // A file whose rows match neither layout is refused by name.
+  {
+    H5Writer w(path);
+    save_view(w, "/h/values", Kokkos::subview(values, std::make_pair(0, 3), Kokkos::ALL));
+    save_view(w, "/h/partner_ids", Kokkos::subview(ids, std::make_pair(0, 3)));
+    save_view(w, "/h/offsets", off);
+    w.commit();
+  }
+  ContactHistory<Exec, 3, true> bad;
+  EXPECT_THROW(bad.load(H5Reader(path), "/h", nl), InputError);
+  std::filesystem::remove_all(dir);
+}
