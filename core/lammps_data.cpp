@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <map>
 #include <numeric>
 #include <sstream>
 #include <vector>
@@ -27,6 +26,34 @@ std::string number(double x) {
   o << x;
   return o.str();
 }
+// One section's rows, flat: an id, `width` values (NaN where a line gave fewer) and the
+// line number per row. A map of small vectors cost ~300 bytes per atom of heap that the
+// process kept after reading; flat arrays cost ~70 and go back to the system.
+struct SectionRows {
+  int width;
+  std::vector<long> id, line;
+  std::vector<double> value;
+  void add(long id_, long line_, const std::vector<double>& v) {
+    id.push_back(id_), line.push_back(line_);
+    for (int c = 0; c < width; ++c)
+      value.push_back(c < static_cast<int>(v.size()) ? v[c] : std::nan(""));
+  }
+  size_t size() const { return id.size(); }
+  const double* row(size_t r) const { return value.data() + r * width; }
+  // Row indices in ascending id; a repeated id fails with both line numbers.
+  std::vector<size_t> sorted(const std::string& path, const std::string& what) const {
+    std::vector<size_t> order(size());
+    for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return id[a] < id[b]; });
+    for (size_t q = 1; q < order.size(); ++q)
+      if (id[order[q]] == id[order[q - 1]])
+        throw InputError(path + ":" + std::to_string(line[order[q]]) + ": " + what + " " +
+                         std::to_string(id[order[q]]) + " appears twice (also on line " +
+                         std::to_string(line[order[q - 1]]) + ")");
+    return order;
+  }
+};
+
 }  // namespace
 
 LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale,
@@ -36,8 +63,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
   LammpsData out;
   long natoms = -1;
   std::string line;
-  std::getline(in, line);  // the first line is a title
-  std::map<long, std::vector<double>> atoms, vels;
+  std::getline(in, line);                                 // the first line is a title
+  SectionRows atoms{6, {}, {}, {}}, vels{6, {}, {}, {}};  // type d rho x y z; v, w
   std::string section;
   long lineno = 1;
   auto fail = [&](const std::string& what) {
@@ -86,41 +113,43 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
              " (atom types in the header, at most " + std::to_string(kLammpsMaxTypes) +
              " species)");
       if (!(v[1] > 0) || !(v[2] > 0)) fail("diameter and density must be positive");
-      if (!atoms.emplace(id, v).second) fail("atom id " + std::to_string(id) + " appears twice");
+      atoms.add(id, lineno, v);
     } else if (section == "Velocities") {
       if (v.size() < 3) fail("Velocities line needs: id vx vy vz [wx wy wz]");
-      if (!vels.emplace(id, v).second) fail("velocity of atom " + std::to_string(id) + " twice");
+      vels.add(id, lineno, v);
     }
   }
   if (natoms < 0) throw InputError(path + ": header lacks the 'N atoms' line");
   if (static_cast<long>(atoms.size()) != natoms)
     throw InputError(path + ": header announces " + std::to_string(natoms) + " atoms, Atoms has " +
                      std::to_string(atoms.size()));
-  for (const auto& [id, v] : vels)
-    if (atoms.count(id) == 0)
-      throw InputError(path + ": Velocities names atom " + std::to_string(id) +
-                       ", which is not in Atoms");
+  const std::vector<size_t> by_id = atoms.sorted(path, "atom id");
+  const std::vector<size_t> vel_by_id = vels.sorted(path, "velocity of atom");
   HostParticles& h = out.particles;
   h.resize(static_cast<int>(natoms));
-  int i = 0;
   const double vscale = length_scale / time_scale;
   out.ids.reserve(atoms.size());
-  for (const auto& [id, a] : atoms) {  // std::map: ascending id
+  size_t q = 0;  // next velocity row, in ascending id as the atoms
+  for (int i = 0; i < static_cast<int>(by_id.size()); ++i) {
+    const long id = atoms.id[by_id[i]];
+    const double* a = atoms.row(by_id[i]);
     out.ids.push_back(id);
     h.species[i] = static_cast<int>(a[0]) - 1;
     h.radius[i] = 0.5 * a[1] * length_scale;
     h.density[i] = a[2] * (mass_scale / (length_scale * length_scale * length_scale));
     h.x[i] = a[3] * length_scale, h.y[i] = a[4] * length_scale, h.z[i] = a[5] * length_scale;
-    auto it = vels.find(id);
-    if (it != vels.end()) {
-      h.vx[i] = it->second[0] * vscale, h.vy[i] = it->second[1] * vscale,
-      h.vz[i] = it->second[2] * vscale;
-      if (it->second.size() >= 6)
-        h.wx[i] = it->second[3] / time_scale, h.wy[i] = it->second[4] / time_scale,
-        h.wz[i] = it->second[5] / time_scale;
+    if (q < vel_by_id.size() && vels.id[vel_by_id[q]] < id)
+      break;  // a velocity for an id that Atoms skipped: reported below
+    if (q < vel_by_id.size() && vels.id[vel_by_id[q]] == id) {
+      const double* v = vels.row(vel_by_id[q++]);
+      h.vx[i] = v[0] * vscale, h.vy[i] = v[1] * vscale, h.vz[i] = v[2] * vscale;
+      if (!std::isnan(v[5]))
+        h.wx[i] = v[3] / time_scale, h.wy[i] = v[4] / time_scale, h.wz[i] = v[5] / time_scale;
     }
-    ++i;
   }
+  if (q < vel_by_id.size())
+    throw InputError(path + ": Velocities names atom " + std::to_string(vels.id[vel_by_id[q]]) +
+                     ", which is not in Atoms");
   return out;
 }
 

@@ -70,6 +70,7 @@ class DemSystem {
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
+    nl_.keep_mirror(two_pass());
     rebuild();
     forces(0.0);  // initial forces: no spring increment for a step not taken
   }
