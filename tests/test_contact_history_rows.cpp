@@ -64,7 +64,8 @@ TYPED_TEST(ContactHistoryRowsTest, EachContactsSpringSitsInItsOwnersRowThroughRe
   ASSERT_EQ(static_cast<int>(hist.extent(0)), nl.num_pairs());
   const auto off = on_host(nl.offsets()), own = on_host(nl.owned_end());
   const auto pb = on_host(nl.pair_begin()), nb = on_host(nl.neighbors());
-  const auto x = on_host(sys.particles().x), a = on_host(sys.particles().radius);
+  const auto x = on_host(sys.particles().x);
+  const auto a = on_host(sys.particles().radius);
   const PeriodicBox box = sys.box();
   int touching = 0, loaded = 0;
   for (int i = 0; i < sys.particles().n; ++i) {
