@@ -119,7 +119,9 @@ struct NoPairHook {
   KOKKOS_INLINE_FUNCTION void apart(int) const {}
 };
 
-// Two passes. Pairs: the owner of each contact (the particle with the lower identity, which
+// Two passes indexed by list entry, for the multi-contact laws (kernels/multicontact.hpp),
+// whose per-entry data both sides of a contact read; the classical laws use the pair rows
+// below. Pairs: the owner of each contact (the particle with the lower identity, which
 // survives reordering) evaluates it once,
 // advances its history and stores the force on i and the torques on i and j. Gather: every
 // particle sums the contacts of its list in list order (owner entries directly, the others
@@ -218,6 +220,122 @@ void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSp
           for (int d = 0; d < 3; ++d) fi[d] -= pair(o, d);
           if constexpr (rot)
             for (int d = 0; d < 3; ++d) qi[d] += pair(o, 6 + d);
+        }
+        for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
+      });
+}
+
+// The classical laws' two passes, indexed by pair rows (NeighborList::pair_begin): the
+// per-contact array has one row per contact, half the list, next to the history rows.
+// One contact: evaluated into row r (force on the owner i, torques on i and on the partner j),
+// its history advanced; an apart contact leaves a zero row and forgets its history.
+template <class Model, class PV, class HistoryView, class PairView>
+KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, const Model& m,
+                                        const Body& bi, const int j, const int r,
+                                        const HistoryView& history, const PairView& pair,
+                                        const double r3[3], const double dt) {
+  constexpr int H = Model::history;
+  constexpr bool rot = Model::rotations;
+  constexpr int NB = rot ? 9 : 3;
+  (void)history;
+  double rx, ry, rz, r2;
+  if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
+    for (int c = 0; c < NB; ++c) pair(r, c) = 0.0;
+    if constexpr (H > 0) {  // most such rows are already zero: reading is cheaper
+      bool stale = false;
+      for (int c = 0; c < H; ++c) stale = stale || history(r, c) != 0.0;
+      if (stale)
+        for (int c = 0; c < H; ++c) history(r, c) = 0.0;
+    }
+    return;
+  }
+  PairState s;
+  pair_geometry(bi, load_body(pv, j, rot), rx, ry, rz, r2, r3, rot, s);
+  double h[H > 0 ? H : 1];
+  if constexpr (H > 0)
+    for (int c = 0; c < H; ++c) h[c] = history(r, c);
+  PairForce out;
+  m.evaluate(s, dt, h, out);
+  if constexpr (H > 0)
+    for (int c = 0; c < H; ++c) history(r, c) = h[c];
+  for (int d = 0; d < 3; ++d) pair(r, d) = out.f[d];
+  if constexpr (rot)
+    for (int d = 0; d < 3; ++d) pair(r, 3 + d) = out.q[d], pair(r, 6 + d) = out.qj[d];
+}
+
+// Contacts pass. One thread per contact (default): on a device the threads of a warp then
+// all do the same work, where one thread per particle leaves most of a warp idle behind the
+// particle with the most owned contacts, and consecutive threads touch consecutive rows.
+// `thread_per_particle`: the earlier mapping (each owner loops over its contacts), kept to
+// measure the difference; both evaluate every contact with the same arithmetic, so the
+// results are the same bit for bit.
+template <class ExecSpace, class Model, class HistoryView, class PairView>
+void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                          const HistoryView& history, const PairView& pair, const PeriodicBox& box,
+                          const Model& model, const double strain_rate[3], double dt,
+                          bool thread_per_particle) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto offsets = nl.offsets(), neighbors = nl.neighbors();
+  auto owned_end = nl.owned_end(), pair_begin = nl.pair_begin(), pair_owner = nl.pair_owner();
+  const PeriodicBox b = box;
+  const Model m = model;
+  const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
+  if (thread_per_particle) {
+    Kokkos::parallel_for(
+        "dem::compute_forces::contacts_by_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+        KOKKOS_LAMBDA(const int i) {
+          const double r3[3] = {rate[0], rate[1], rate[2]};
+          const Body bi = load_body(pv, i, Model::rotations);
+          const int row0 = pair_begin(i) - offsets(i);
+          for (int k = offsets(i); k < owned_end(i); ++k)
+            contact_row(pv, b, m, bi, neighbors(k), row0 + k, history, pair, r3, dt);
+        });
+    return;
+  }
+  Kokkos::parallel_for(
+      "dem::compute_forces::contacts", Kokkos::RangePolicy<ExecSpace>(0, nl.num_pairs()),
+      KOKKOS_LAMBDA(const int r) {
+        const double r3[3] = {rate[0], rate[1], rate[2]};
+        const int i = pair_owner(r);
+        const int k = offsets(i) + r - pair_begin(i);  // the owner's list entry
+        contact_row(pv, b, m, load_body(pv, i, Model::rotations), neighbors(k), r, history, pair,
+                    r3, dt);
+      });
+}
+
+// Gather pass: every particle sums its contacts in list order, the owned ones from its own
+// consecutive rows, the others from the partner's row (NeighborList::pair_row) with the
+// force's sign flipped. No atomics, and a summation order independent of threads and backend.
+template <class ExecSpace, class Model, class PairView>
+void gather_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                         const PairView& pair, const Damping& damping) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto f = p.f, torque = p.torque;
+  auto offsets = nl.offsets(), owned_end = nl.owned_end();
+  auto pair_begin = nl.pair_begin(), pair_row = nl.pair_row();
+  const double gb = damping.translational, gr = damping.rotational;
+  Kokkos::parallel_for(
+      "dem::compute_forces::gather_rows", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i) {
+        constexpr bool rot = Model::rotations;
+        (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
+        (void)gr;
+        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
+        double qi[3] = {0, 0, 0};
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+        for (int r = pair_begin(i); r < pair_begin(i + 1); ++r) {
+          for (int d = 0; d < 3; ++d) fi[d] += pair(r, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 3 + d);
+        }
+        for (int k = owned_end(i); k < offsets(i + 1); ++k) {
+          const int r = pair_row(k);
+          for (int d = 0; d < 3; ++d) fi[d] -= pair(r, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 6 + d);
         }
         for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
         if constexpr (rot)
@@ -465,15 +583,16 @@ template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
-                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>(), bool batched = true) {
+                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>(), bool batched = true,
+                    bool thread_per_particle = false) {
   if (!two_pass) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
       compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, batched);
       return;
     }
   }
-  compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt);
-  gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
+  compute_contact_rows(p, nl, history, pair, box, model, strain_rate, dt, thread_per_particle);
+  gather_contact_rows<ExecSpace, Model>(p, nl, pair, damping);
 }
 
 }  // namespace granular

@@ -41,6 +41,8 @@ struct DemParams {
                                   // the one-pass slab kernel (tests compare the two)
   bool batched_contacts = true;   // host one-pass kernel: laws with a batched (vector)
                                   // evaluation use it; false: contact by contact (tests)
+  bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
+                                             // contacts (the earlier mapping, for comparison)
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -70,7 +72,8 @@ class DemSystem {
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
-    nl_.keep_mirror(two_pass());
+    nl_.keep_mirror(false);    // the indices the first build makes (size_pair_buffer)
+    nl_.keep_pair_index(two_pass());
     rebuild();
     forces(0.0);  // initial forces: no spring increment for a step not taken
   }
@@ -147,7 +150,7 @@ class DemSystem {
     }
     mc.validate(used);
     // Multi-contact laws act between the two passes, which need the per-contact forces.
-    size_pair_buffer(two_pass() || mc.mode != MultiContact::None);
+    size_pair_buffer(two_pass() || mc.mode != MultiContact::None, mc.mode != MultiContact::None);
     mc_.configure(mc, p_, nl_, walls_.size(), pair_.extent(0));
     initial_forces();
   }
@@ -180,7 +183,7 @@ class DemSystem {
     }
     nl_.build(p_, box_, params_.sort);
     history_.remap(p_, nl_, order);
-    size_pair_buffer(two_pass());
+    size_pair_buffer(two_pass(), mc_.active());
     mc_.after_build(p_, nl_, order, pair_.extent(0));
   }
 
@@ -310,7 +313,7 @@ class DemSystem {
       box_.periodic[d] = s[5 + 4 * d] != 0.0, rate_[d] = s[6 + 4 * d];
     }
     walls_.update(time_);
-    size_pair_buffer(two_pass());
+    size_pair_buffer(two_pass(), mc_.active());
   }
 
  private:
@@ -321,16 +324,20 @@ class DemSystem {
   bool two_pass() const {
     return params_.two_pass_forces || mc_.active() || !forces_by_slabs<ExecSpace>();
   }
-  // The list's mirror index serves the same kernel only.
-  void size_pair_buffer(bool needed) {
-    nl_.keep_mirror(needed);
+  // Multi-contact laws index it by list entry (both sides of a contact read their entries)
+  // through the list's mirror; the classical laws by pair row (half the rows) through the
+  // list's pair index. The list keeps only the index the kernel in use reads.
+  void size_pair_buffer(bool needed, bool by_entry) {
+    nl_.keep_mirror(needed && by_entry);
+    nl_.keep_pair_index(needed && !by_entry);
     if (!needed) {
       pair_ = pair_view();
       return;
     }
     constexpr int nb = Model::rotations ? 9 : 3;
-    if (pair_.extent(0) < static_cast<size_t>(nl_.num_entries()) || pair_.extent(0) == 0)
-      pair_ = pair_view("dem::pair_forces", nl_.num_entries() + nl_.num_entries() / 8 + 16, nb);
+    const size_t rows = by_entry ? nl_.num_entries() : nl_.num_pairs();
+    if (pair_.extent(0) < rows || pair_.extent(0) == 0)
+      pair_ = pair_view("dem::pair_forces", rows + rows / 8 + 16, nb);
   }
 
   bool rebuild_due(double max_sq) const {
@@ -345,7 +352,7 @@ class DemSystem {
       return;
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass(), params_.batched_contacts);
+                   two_pass(), params_.batched_contacts, params_.contact_thread_per_particle);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);

@@ -110,6 +110,20 @@ class NeighborList {
   // entries: owned entry k has row pair_begin(i) + k - offsets(i). Half the list's rows.
   const int_view& pair_begin() const { return pair_begin_; }  // n + 1
   int num_pairs() const { return num_pairs_; }
+  // The pair index of the device's contact-parallel force pass, kept only while
+  // keep_pair_index(true): pair_owner()(r) is the owner of pair row r (one thread per contact
+  // finds its particle and list entry from it), and pair_row()(k) is the row of entry k's
+  // contact, the partner's owned entry for a contact i does not own (the gather reads both
+  // halves of its list from the rows).
+  const int_view& pair_owner() const { return pair_owner_; }  // num_pairs()
+  const int_view& pair_row() const { return pair_row_; }      // num_entries()
+  void keep_pair_index(bool on) {
+    keep_pair_index_ = on;
+    if (!on)
+      pair_owner_ = int_view(), pair_row_ = int_view(), pair_index_valid_ = false;
+    else if (!pair_index_valid_ && offsets_.extent(0) > 0)
+      build_pair_index(static_cast<int>(owned_end_.extent(0)));
+  }
   // Particles in cell order (cells in z, y, x lexicographic order; identity order inside a
   // cell): particles of a cell and of its x-neighbours sit close in memory.
   const int_view& cell_order() const { return cell_particles_; }
@@ -179,12 +193,15 @@ class NeighborList {
     for (int d = 0; d < 3; ++d) built_len_[d] = s[3 + d];
     index_pairs(static_cast<int>(owned_end_.extent(0)));  // follows from the rows
     keep_mirror(keep_mirror_);
+    pair_index_valid_ = false;
+    keep_pair_index(keep_pair_index_);
   }
 
   // Public only because nvcc rejects extended lambdas in private member functions.
   void index_pairs(int n);
   void relabel_cells(int n);
   void build_mirror(int n);
+  void build_pair_index(int n);
 
  private:
   double skin_;
@@ -192,9 +209,10 @@ class NeighborList {
   long builds_ = 0;
   double a_max_ = 0.0;
   double built_len_[3] = {1, 1, 1};
-  int_view offsets_, neighbors_, mirror_, owned_end_, pair_begin_;
+  int_view offsets_, neighbors_, mirror_, owned_end_, pair_begin_, pair_owner_, pair_row_;
   int num_pairs_ = 0;
   bool keep_mirror_ = true, mirror_valid_ = false;
+  bool keep_pair_index_ = false, pair_index_valid_ = false;
   int_view cell_of_, cell_start_, cell_count_, cell_particles_;
   int_view slab_begin_;
   int num_slabs_ = 0;
@@ -434,6 +452,8 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   mirror_valid_ = false;
   if (keep_mirror_) build_mirror(n);
   index_pairs(n);
+  pair_index_valid_ = false;
+  if (keep_pair_index_) build_pair_index(n);
   Kokkos::deep_copy(x_ref_, x);
   for (int d = 0; d < 3; ++d) built_len_[d] = box.len[d];
   ++builds_;
@@ -479,6 +499,34 @@ void NeighborList<ExecSpace>::index_pairs(int n) {
       },
       total);
   num_pairs_ = total;
+}
+
+template <class ExecSpace>
+void NeighborList<ExecSpace>::build_pair_index(int n) {
+  // Room for growth as the list's own arrays have, so that most rebuilds reallocate nothing.
+  if (pair_owner_.extent(0) < static_cast<size_t>(num_pairs_) || pair_owner_.extent(0) == 0)
+    pair_owner_ = int_view("neighbor::pair_owner", num_pairs_ + num_pairs_ / 8 + 8);
+  if (pair_row_.extent(0) < neighbors_.extent(0))
+    pair_row_ = int_view("neighbor::pair_row", neighbors_.extent(0));
+  auto offsets = offsets_, owned_end = owned_end_, neighbors = neighbors_;
+  auto pair_begin = pair_begin_, pair_owner = pair_owner_, pair_row = pair_row_;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::pair_index", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        const int own = owned_end(i), row0 = pair_begin(i) - offsets(i);
+        for (int k = offsets(i); k < own; ++k) pair_owner(row0 + k) = i, pair_row(k) = row0 + k;
+        for (int k = own; k < offsets(i + 1); ++k) {
+          const int j = neighbors(k);  // the owner: i is among j's owned entries
+          int r = -1;
+          for (int q = offsets(j); q < owned_end(j); ++q)
+            if (neighbors(q) == i) {
+              r = pair_begin(j) + q - offsets(j);
+              break;
+            }
+          pair_row(k) = r;  // the list is symmetric by construction, so r is always found
+        }
+      });
+  pair_index_valid_ = true;
 }
 
 }  // namespace granular

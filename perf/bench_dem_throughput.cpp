@@ -5,10 +5,13 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
+//                        [--thread-per-particle]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
-// --no-triad skips the bandwidth measurement (its 768 MiB of arrays would also dominate the
-// peak resident memory that every row records).
+// --thread-per-particle: the device's contacts pass with one thread per particle instead of
+// one per contact (DemParams::contact_thread_per_particle; the same bits).
+// --no-triad skips the bandwidth measurements, triad and copy (their 768 MiB of arrays would
+// also dominate the peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
 //   frictionless   linear normal spring-dashpot only (no history, no rotations)
 //   friction       + tangential spring with history and Coulomb mu = 0.5, rotations
@@ -92,7 +95,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
-    bool triad = true, batched = true;
+    bool triad = true, batched = true, per_particle = false;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -120,6 +123,8 @@ int main(int argc, char** argv) {
         triad = false;
       else if (a == "--no-batch")
         batched = false;
+      else if (a == "--thread-per-particle")
+        per_particle = true;
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
@@ -129,15 +134,19 @@ int main(int argc, char** argv) {
     if (out.empty()) out = "perf/results/dem_throughput_" + std::to_string(threads) + "t.json";
 
     const double bandwidth = triad ? perf::triad_bandwidth() : 0.0;
+    const double copy_bw = triad ? perf::copy_bandwidth() : 0.0;
     Json result = Json::object();
     result["benchmark"] = "dem_throughput";
     result["machine"] = perf::machine_info();
     if (triad) result["triad_bandwidth_GBs"] = bandwidth / 1e9;
+    if (triad) result["copy_bandwidth_GBs"] = copy_bw / 1e9;
     result["parameters"] =
         "k_n 1e5, gamma_n 1000, k_t 8e4, gamma_t 500, mu 0.5 (mm, us, ug); dt 0.0045, skin 0.2";
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
     result["batched_contacts"] = batched && cpu_has_avx();
+    if (!forces_by_slabs<Exec>())
+      result["contacts_pass"] = per_particle ? "thread per particle" : "thread per contact";
     Json rows = Json::array();
 
     const std::vector<int> ns = data.empty() ? parse_sizes(sizes) : std::vector<int>{0};
@@ -176,6 +185,7 @@ int main(int argc, char** argv) {
           for (int r = 0; r < reps; ++r) {
             DemParams prm = bench_params();
             prm.batched_contacts = batched;
+            prm.contact_thread_per_particle = per_particle;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
             if (r == reps - 1) host = HostParticles();
@@ -224,14 +234,19 @@ int main(int argc, char** argv) {
             force_bytes = (24 + 24 * R) * 2 + body_i + 16 + owned * (4 + 24 + 8 + 8 * H) +
                           contacts * (body_j_rest + 8 * H + 48 * (1 + R)) + 48 * (1 + R);
           } else {
-            // Pair pass: per owned entry the partner's x and radius, the history and the
-            // per-contact force row (3 or 9 doubles) written, zeros included; per contact the
-            // partner's other fields and the history written. Gather pass: per entry the
-            // mirror index and the force row read, then f and torque written.
+            // Contacts pass, per owned entry (one row per contact): the list entry, the
+            // partner's x and radius, the history and the per-contact force row (3 or 9 doubles)
+            // written, zeros included; per contact the partner's other fields and the history
+            // written; with a thread per contact, each also reads its row's owner. Gather pass: the
+            // owned rows read, per other entry the partner's row index and the row, then v, w read
+            // and f, torque written.
             const double row = 8 * (3 + 6 * R);
-            force_bytes = body_i + 8 + owned * (4 + 24 + 8 + 8 * H + row) +
-                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 8 + nb * (4 + row) +
-                          24 * (1 + R);
+            // (The owner's state and offsets, read again by each of its contacts' threads,
+            // come from cache: counted once, as for a thread per particle.)
+            const double owner = body_i + 8 + (per_particle ? 0.0 : owned * 4);
+            force_bytes = owner + owned * (4 + 24 + 8 + 8 * H + row) +
+                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 16 + owned * row +
+                          (nb - owned) * (4 + row) + 24 * (1 + R);
           }
           // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
           // written): the closing kick of each step is deferred into the next one.
@@ -263,6 +278,7 @@ int main(int argc, char** argv) {
           row["bytes_per_particle_step"] = bytes;
           row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
           if (triad) row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
+          if (triad) row["fraction_of_copy_bandwidth"] = med * bytes / copy_bw;
           // Peak resident memory of the process so far (all rows up to this one).
           row["resident_kB"] = perf::peak_resident_kB();
           Json split = Json::object();
@@ -276,6 +292,7 @@ int main(int argc, char** argv) {
                     << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step";
           if (triad)
             std::cout << ", " << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9
+                      << " GB/s, " << 100 * med * bytes / copy_bw << " % of copy " << copy_bw / 1e9
                       << " GB/s";
           std::cout << "\n";
         });

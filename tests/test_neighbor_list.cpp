@@ -1,7 +1,7 @@
 // Neighbour list against an O(N^2) brute-force search with periodic images, for a
 // polydisperse packing after random displacements and after box compression; and the
 // skin criterion: while no rebuild is requested, no touching pair is missing; the owned-first
-// order and the mirror entries the force loops rely on.
+// order, the mirror entries and the pair index the force loops rely on.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -85,6 +85,24 @@ void check_owned_first_and_mirror(const NeighborList<Exec>& nl, const Particles<
     }
   }
   EXPECT_EQ(2 * owned, static_cast<long>(nl.num_entries()));  // every pair owned once
+  // The pair index: row r = pair_begin(i) + (k - offsets(i)) of owned entry k belongs to i,
+  // and both entries of a pair name the same row (the owner's).
+  ASSERT_EQ(nl.num_pairs(), owned);
+  ASSERT_GT(nl.pair_owner().extent(0), 0u) << "the test lists keep the pair index";
+  auto begin = Kokkos::create_mirror_view_and_copy(h, nl.pair_begin());
+  auto owner = Kokkos::create_mirror_view_and_copy(h, nl.pair_owner());
+  auto prow = Kokkos::create_mirror_view_and_copy(h, nl.pair_row());
+  std::vector<int> seen(owned, 0);
+  for (int i = 0; i < p.n; ++i)
+    for (int k = off(i); k < off(i + 1); ++k) {
+      const int j = nb(k), r = prow(k);
+      const int o = k < own(i) ? i : j;  // the pair's owner
+      const int ko = k < own(i) ? k : mir(k);
+      ASSERT_EQ(r, begin(o) + ko - off(o)) << "entry " << k << " of particle " << i;
+      EXPECT_EQ(owner(r), o);
+      ++seen[r];
+    }
+  for (long r = 0; r < owned; ++r) EXPECT_EQ(seen[r], 2) << "row " << r;
 }
 
 template <class Exec>
@@ -117,6 +135,7 @@ TYPED_TEST(NeighborListTest, MatchesBruteForceWithPeriodicImagesAfterDisplacemen
   auto p = gas<Exec>(box, 600, 0.35);
   const double skin = 0.3;
   NeighborList<Exec> nl(skin);
+  nl.keep_pair_index(true);
   nl.build(p, box);
   EXPECT_EQ(listed(nl, p.n), brute_force(p, box, skin));
   check_owned_first_and_mirror(nl, p);
@@ -201,6 +220,7 @@ TYPED_TEST(NeighborListTest, CrowdedParticleBeyondTheRowCapacityIsListedExactly)
   auto p = Particles<Exec>::from_host(h);
   const double skin = 0.8;
   NeighborList<Exec> nl(skin);
+  nl.keep_pair_index(true);
   for (int build = 0; build < 2; ++build) {
     nl.build(p, box);
     const auto ref = brute_force(p, box, skin);
