@@ -63,11 +63,13 @@ class DemSystem {
             const DemParams& params)
       : p_(std::move(particles)), box_(box), model_(model), params_(params), nl_(params.skin) {
     if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
-    auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
-    for (int i = 0; i < p_.n; ++i) {
-      particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
-      a_min_ = std::min(a_min_, radius(i));
-      a_max_ = std::max(a_max_, radius(i));
+    {  // scoped: on a host backend the mirror is the array itself, which the sort replaces
+      auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
+      for (int i = 0; i < p_.n; ++i) {
+        particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
+        a_min_ = std::min(a_min_, radius(i));
+        a_max_ = std::max(a_max_, radius(i));
+      }
     }
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
