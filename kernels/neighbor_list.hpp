@@ -217,7 +217,7 @@ class NeighborList {
   int_view slab_begin_;
   int num_slabs_ = 0;
   static constexpr int kMaxScratch = 64;
-  int scratch_cap_ = 24;
+  int scratch_cap_ = 24;  // the first build's guess; later ones follow the mean row
   int nc_[3] = {1, 1, 1};
   typename Particles<ExecSpace>::vec_view x_ref_;
 };
@@ -373,9 +373,8 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
 
   // One stencil sweep counts each particle's partners (and the owned ones, of higher
   // identity) and keeps the first `cap` of them in a scratch row; a scan gives the offsets,
-  // and the rows are copied owned first. Only if some particle has more than `cap`
-  // partners is the stencil swept a second time to fill the list directly. `cap` follows
-  // the largest count (up to kMaxScratch), so the second sweep is rare.
+  // and the rows are copied owned first. Only the particles with more than `cap` partners
+  // sweep their stencil a second time. `cap` follows the mean count (below).
   auto offsets = offsets_;
   auto owned_end = owned_end_;
   auto id = p.id;
@@ -384,10 +383,9 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   const int cap = scratch_cap_;
   int_view scratch(Kokkos::view_alloc("neighbor::scratch", Kokkos::WithoutInitializing),
                    static_cast<size_t>(n) * cap);
-  int most = 0;
-  Kokkos::parallel_reduce(
+  Kokkos::parallel_for(
       "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
-      KOKKOS_LAMBDA(const int i, int& mx) {
+      KOKKOS_LAMBDA(const int i) {
         const int id_i = id(i);
         int count = 0, owned = 0;
         const size_t row = static_cast<size_t>(i) * cap;
@@ -398,9 +396,7 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
         });
         offsets(i) = count;
         owned_end(i) = owned;
-        mx = count > mx ? count : mx;
-      },
-      Kokkos::Max<int>(most));
+      });
   int total = 0;
   Kokkos::parallel_scan(
       "neighbor::NeighborList::scan", Kokkos::RangePolicy<ExecSpace>(0, n + 1),
@@ -414,15 +410,18 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   if (static_cast<int>(neighbors_.extent(0)) < total)
     neighbors_ = int_view("neighbor::neighbors", total + total / 8 + 16);
   auto neighbors = neighbors_;
-  if (most <= cap) {
-    Kokkos::parallel_for(
-        "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
-        KOKKOS_LAMBDA(const int i) {
-          const int id_i = id(i);
-          int ko = offsets(i), kp = offsets(i) + owned_end(i);
-          owned_end(i) = kp;
+  // Rows that fit the scratch are copied from it; a row with more partners than `cap` (a
+  // large particle among small ones) sweeps its stencil again, in the same order: the list is
+  // the same either way.
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::fill", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i) {
+        const int id_i = id(i);
+        int ko = offsets(i), kp = offsets(i) + owned_end(i);
+        owned_end(i) = kp;
+        const int count = offsets(i + 1) - offsets(i);
+        if (count <= cap) {
           const size_t row = static_cast<size_t>(i) * cap;
-          const int count = offsets(i + 1) - offsets(i);
           for (int c = 0; c < count; ++c) {
             const int j = scratch(row + c);
             if (id(j) > id_i)
@@ -430,25 +429,20 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
             else
               neighbors(kp++) = j;
           }
-        });
-  } else {
-    Kokkos::parallel_for(
-        "neighbor::NeighborList::fill_sweep", Kokkos::RangePolicy<ExecSpace>(0, n),
-        KOKKOS_LAMBDA(const int i) {
-          const int id_i = id(i);
-          int ko = offsets(i), kp = offsets(i) + owned_end(i);
-          owned_end(i) = kp;
+        } else {
           visit(i, [&](int j) {
             if (id(j) > id_i)
               neighbors(ko++) = j;
             else
               neighbors(kp++) = j;
           });
-        });
-  }
-  // Room for a little growth; a list with a few crowded particles (large ones among small)
-  // keeps the bounded scratch and sweeps twice rather than hold n x (largest count).
-  scratch_cap_ = most + most / 4 + 2 <= kMaxScratch ? std::max(cap, most + most / 4 + 2) : cap;
+        }
+      });
+  // The scratch follows the mean row, with room for the spread of a packing's counts, not
+  // the largest: n x (largest count) would be the peak of memory at every rebuild of a
+  // polydisperse packing, for the sake of its few large particles.
+  const int mean = n > 0 ? (total + n - 1) / n : 0;
+  scratch_cap_ = std::min(kMaxScratch, std::max(8, mean + mean / 2 + 2));
   mirror_valid_ = false;
   if (keep_mirror_) build_mirror(n);
   index_pairs(n);
