@@ -119,6 +119,46 @@ struct NoPairHook {
   KOKKOS_INLINE_FUNCTION void apart(int) const {}
 };
 
+// Gather pass: every particle sums its contacts in list order, the owned ones from its own
+// consecutive rows (from own_row(i) on), the others from the partner's row other_row(k) with
+// the force's sign flipped. No atomics, and a summation order independent of threads and
+// backend. The classical laws' rows are pair rows (pair_begin, pair_row); the multi-contact
+// laws' are list entries (offsets, mirror).
+template <class ExecSpace, class Model, class PairView, class IndexView>
+void gather_contact_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                           const PairView& pair, const Damping& damping, const IndexView& own_row,
+                           const IndexView& other_row, const char* label) {
+  const ParticleViews<ExecSpace> pv(p);
+  auto f = p.f, torque = p.torque;
+  auto offsets = nl.offsets(), owned_end = nl.owned_end();
+  const double gb = damping.translational, gr = damping.rotational;
+  Kokkos::parallel_for(
+      label, Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
+        constexpr bool rot = Model::rotations;
+        (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
+        (void)gr;
+        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
+        double qi[3] = {0, 0, 0};
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
+        const int r0 = own_row(i), own = owned_end(i) - offsets(i);
+        for (int r = r0; r < r0 + own; ++r) {
+          for (int d = 0; d < 3; ++d) fi[d] += pair(r, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 3 + d);
+        }
+        for (int k = owned_end(i); k < offsets(i + 1); ++k) {
+          const int r = other_row(k);
+          for (int d = 0; d < 3; ++d) fi[d] -= pair(r, d);
+          if constexpr (rot)
+            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 6 + d);
+        }
+        for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
+        if constexpr (rot)
+          for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
+      });
+}
+
 // Two passes indexed by list entry, for the multi-contact laws (kernels/multicontact.hpp),
 // whose per-entry data both sides of a contact read; the classical laws use the pair rows
 // below. Pairs: the owner of each contact (the particle with the lower identity, which
@@ -194,37 +234,8 @@ void compute_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecS
 template <class ExecSpace, class Model, class PairView>
 void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                         const PairView& pair, const Damping& damping) {
-  const ParticleViews<ExecSpace> pv(p);
-  auto f = p.f, torque = p.torque;
-  auto offsets = nl.offsets(), mirror = nl.mirror();
-  auto owned_end = nl.owned_end();
-  const double gb = damping.translational, gr = damping.rotational;
-  Kokkos::parallel_for(
-      "dem::compute_forces::gather", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
-        constexpr bool rot = Model::rotations;
-        (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
-        (void)gr;
-        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
-        double qi[3] = {0, 0, 0};
-        if constexpr (rot)
-          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
-        const int own = owned_end(i);
-        for (int k = offsets(i); k < own; ++k) {
-          for (int d = 0; d < 3; ++d) fi[d] += pair(k, d);
-          if constexpr (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += pair(k, 3 + d);
-        }
-        for (int k = own; k < offsets(i + 1); ++k) {
-          const int o = mirror(k);
-          for (int d = 0; d < 3; ++d) fi[d] -= pair(o, d);
-          if constexpr (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += pair(o, 6 + d);
-        }
-        for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
-        if constexpr (rot)
-          for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
-      });
+  gather_contact_forces<ExecSpace, Model>(p, nl, pair, damping, nl.offsets(), nl.mirror(),
+                                          "dem::compute_forces::gather");
 }
 
 // The classical laws' two passes, indexed by pair rows (NeighborList::pair_begin): the
@@ -302,44 +313,6 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
         const int k = offsets(i) + r - pair_begin(i);  // the owner's list entry
         contact_row(pv, b, m, load_body(pv, i, Model::rotations), neighbors(k), r, history, pair,
                     r3, dt);
-      });
-}
-
-// Gather pass: every particle sums its contacts in list order, the owned ones from its own
-// consecutive rows, the others from the partner's row (NeighborList::pair_row) with the
-// force's sign flipped. No atomics, and a summation order independent of threads and backend.
-template <class ExecSpace, class Model, class PairView>
-void gather_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                         const PairView& pair, const Damping& damping) {
-  const ParticleViews<ExecSpace> pv(p);
-  auto f = p.f, torque = p.torque;
-  auto offsets = nl.offsets(), owned_end = nl.owned_end();
-  auto pair_begin = nl.pair_begin(), pair_row = nl.pair_row();
-  const double gb = damping.translational, gr = damping.rotational;
-  Kokkos::parallel_for(
-      "dem::compute_forces::gather_rows", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
-        constexpr bool rot = Model::rotations;
-        (void)torque.extent(0);  // nvcc: capture outside the constexpr-ifs that use them
-        (void)gr;
-        double fi[3] = {-gb * pv.v(i, 0), -gb * pv.v(i, 1), -gb * pv.v(i, 2)};
-        double qi[3] = {0, 0, 0};
-        if constexpr (rot)
-          for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
-        for (int r = pair_begin(i); r < pair_begin(i + 1); ++r) {
-          for (int d = 0; d < 3; ++d) fi[d] += pair(r, d);
-          if constexpr (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 3 + d);
-        }
-        for (int k = owned_end(i); k < offsets(i + 1); ++k) {
-          const int r = pair_row(k);
-          for (int d = 0; d < 3; ++d) fi[d] -= pair(r, d);
-          if constexpr (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += pair(r, 6 + d);
-        }
-        for (int d = 0; d < 3; ++d) f(i, d) = fi[d];
-        if constexpr (rot)
-          for (int d = 0; d < 3; ++d) torque(i, d) = qi[d];
       });
 }
 
@@ -592,7 +565,8 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
     }
   }
   compute_contact_rows(p, nl, history, pair, box, model, strain_rate, dt, thread_per_particle);
-  gather_contact_rows<ExecSpace, Model>(p, nl, pair, damping);
+  gather_contact_forces<ExecSpace, Model>(p, nl, pair, damping, nl.pair_begin(), nl.pair_row(),
+                                          "dem::compute_forces::gather_rows");
 }
 
 }  // namespace granular
