@@ -3,8 +3,8 @@
 // Full list (each pair stored for both particles) so that every particle sums its own
 // forces in a fixed order: no atomics, and results that are bitwise identical for any
 // thread count and on any backend. Each contact is computed once, by its owner (the lower
-// identity); the device's two passes gather it for both through the mirror entry, the host's
-// one pass adds it to both at once. Per-contact data lives in the owners' rows only
+// identity); the device's two passes gather it for both from the owner's row (pair_row), the
+// host's one pass adds it to both at once. Per-contact data lives in the owners' rows only
 // (pair_begin). The order inside a cell is sorted by particle identity for the same reason.
 //
 // The list is rebuilt only when it may have become wrong: some particle moved more than
@@ -90,8 +90,9 @@ class NeighborList {
   const int_view& offsets() const { return offsets_; }      // n + 1
   const int_view& neighbors() const { return neighbors_; }  // offsets(n)
   // For entry k = (i, j): the entry (j, i). Lets the pair owner (i < j) compute a contact
-  // once and both particles gather it in a fixed order (the two-pass force kernel). Kept
-  // only while keep_mirror(true) (the default); the host's one-pass kernel does without.
+  // once and both particles gather it in a fixed order (the multi-contact laws' two-pass
+  // kernel, whose per-contact data is per entry). Kept only while keep_mirror(true) (the
+  // default for a bare list; DemSystem asks for it only with a multi-contact law).
   const int_view& mirror() const { return mirror_; }
   // Whether builds make mirror(); turning it on completes the current list's at once.
   void keep_mirror(bool on) {
