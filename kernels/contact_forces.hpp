@@ -365,6 +365,38 @@ KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
   }
 }
 
+// A stretch of an owner row for the host kernel, split into its touching entries (list
+// order, with the separation found by the distance test) and its apart ones. In a dense
+// packing whether a listed pair touches is close to a coin toss, so a branch per entry was
+// mispredicted about every other time; the split stores every entry and advances a count
+// instead, and the apart entries' histories are forgotten after it.
+struct RowSplit {
+  static constexpr int kChunk = 32;  // entries per stretch
+  int n = 0;                         // touching entries
+  int k[kChunk], j[kChunk];
+  double rx[kChunk], ry[kChunk], rz[kChunk], r2[kChunk];
+};
+
+template <int H>
+KOKKOS_FORCEINLINE_FUNCTION void split_row(const HostParticleViews& hv, const PeriodicBox& b,
+                                           const Body& bi, const HostListRows& list, double* hist,
+                                           int row0, int k0, int k1, RowSplit& t) {
+  int far[RowSplit::kChunk];
+  int n = 0, apart = 0;
+  for (int k = k0; k < k1; ++k) {
+    const int j = list.neighbors(k);
+    double rx, ry, rz, r2;
+    const bool in = touching(hv, b, bi, j, rx, ry, rz, r2);
+    t.k[n] = k, t.j[n] = j;
+    t.rx[n] = rx, t.ry[n] = ry, t.rz[n] = rz, t.r2[n] = r2;
+    far[apart] = k;
+    n += in;
+    apart += !in;
+  }
+  t.n = n;
+  for (int a = 0; a < apart; ++a) forget_history<H>(hist, row0 + far[a]);
+}
+
 // One owner row of the one-pass kernel below: particle i evaluates the contacts it owns,
 // adds their forces to itself and scatters the reactions to its partners.
 // `hist` holds the owners' rows (NeighborList::pair_begin).
@@ -379,31 +411,31 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
   double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
   const int kbeg = list.offsets(i), kend = list.owned_end(i);
   const int row0 = H > 0 ? list.pair_begin(i) - kbeg : 0;  // history row of entry k
-  for (int k = kbeg; k < kend; ++k) {
-    const int j = list.neighbors(k);
-    double rx, ry, rz, r2;
-    if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-      forget_history<H>(hist, row0 + k);
-      continue;
-    }
-    PairState s;
-    pair_geometry(bi, load_body(hv, j, rot), rx, ry, rz, r2, r3, rot, s);
-    double h[H > 0 ? H : 1];
-    if (H > 0)
-      for (int c = 0; c < H; ++c) h[c] = hist[(row0 + k) * H + c];
-    PairForce out;
-    m.evaluate(s, dt, h, out);
-    if (H > 0)
-      for (int c = 0; c < H; ++c) hist[(row0 + k) * H + c] = h[c];
-    for (int d = 0; d < 3; ++d) {
-      fi[d] += out.f[d];
-      fh(j, d) -= out.f[d];
-    }
-    if (rot)
+  for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
+    RowSplit t;
+    split_row<H>(hv, b, bi, list, hist, row0, k0,
+                 k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
+    for (int c = 0; c < t.n; ++c) {
+      const int k = t.k[c], j = t.j[c];
+      PairState s;
+      pair_geometry(bi, load_body(hv, j, rot), t.rx[c], t.ry[c], t.rz[c], t.r2[c], r3, rot, s);
+      double h[H > 0 ? H : 1];
+      if (H > 0)
+        for (int q = 0; q < H; ++q) h[q] = hist[(row0 + k) * H + q];
+      PairForce out;
+      m.evaluate(s, dt, h, out);
+      if (H > 0)
+        for (int q = 0; q < H; ++q) hist[(row0 + k) * H + q] = h[q];
       for (int d = 0; d < 3; ++d) {
-        qi[d] += out.q[d];
-        qh(j, d) += out.qj[d];
+        fi[d] += out.f[d];
+        fh(j, d) -= out.f[d];
       }
+      if (rot)
+        for (int d = 0; d < 3; ++d) {
+          qi[d] += out.q[d];
+          qh(j, d) += out.qj[d];
+        }
+    }
   }
   for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
   if (rot)
@@ -460,16 +492,16 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
     }
     const Body bi = load_body(hv, i, rot);
     const int row0 = list.pair_begin(i) - kbeg;  // history row of entry k
-    for (int k = kbeg; k < kend; ++k) {
-      const int j = list.neighbors(k);
-      double rx, ry, rz, r2;
-      if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {
-        forget_history<H>(hist, row0 + k);
-        continue;
+    for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
+      RowSplit t;
+      split_row<H>(hv, b, bi, list, hist, row0, k0,
+                   k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
+      for (int c = 0; c < t.n; ++c) {
+        const int k = t.k[c], j = t.j[c];
+        const Body bj = load_body(hv, j, rot);
+        cb.push(bi, bj, j, row0 + k, t.rx[c], t.ry[c], t.rz[c], t.r2[c], r3,
+                m.normal.table(bi.s, bj.s), m.tangential.table(bi.s, bj.s), hist + (row0 + k) * H);
       }
-      const Body bj = load_body(hv, j, rot);
-      cb.push(bi, bj, j, row0 + k, rx, ry, rz, r2, r3, m.normal.table(bi.s, bj.s),
-              m.tangential.table(bi.s, bj.s), hist + (row0 + k) * H);
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
   }
