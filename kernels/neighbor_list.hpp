@@ -38,6 +38,7 @@ struct CellVisitor {
   PeriodicBox box;
   double skin;
   int ncx, ncy, ncz;
+  double a_max;  // largest radius: no partner of i lies beyond a_i + a_max + skin
 
   // Calls on_neighbor(j) for every partner j of i within the cutoff.
   template <class F>
@@ -64,11 +65,24 @@ struct CellVisitor {
     const int loz = pz ? (ncz >= 3 ? -1 : 0) : (cz > 0 ? -1 : 0);
     const int hiz = pz ? (ncz >= 2 ? 1 : 0) : (cz < ncz - 1 ? 1 : 0);
     const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2), ai = radius(i);
+    // Cells of the stencil beyond the largest cutoff of i are skipped: the squared distance
+    // from i to a neighbour cell is the sum over axes of its distance to that cell's near
+    // face (zero along an axis where the cells coincide). A small particle's cutoff is well
+    // inside the stencil, whose cells are sized for the largest pair. Not where an axis has
+    // fewer than 3 cells (a wrapped neighbour cell lies on both sides of i there).
+    double gx[3], gy[3], gz[3];
+    face_gaps(xi, cx, ncx, 0, px, gx);
+    face_gaps(yi, cy, ncy, 1, py, gy);
+    face_gaps(zi, cz, ncz, 2, pz, gz);
+    const double reach = ai + a_max + skin;
+    const double reach_sq = reach * reach * (1.0 + 1e-9);  // margin for the round-off of gaps
     for (int dz = loz; dz <= hiz; ++dz) {
       const int zz = (cz + dz + ncz) % ncz;
       for (int dy = loy; dy <= hiy; ++dy) {
         const int yy = (cy + dy + ncy) % ncy;
+        const double gzy = gz[dz + 1] + gy[dy + 1];
         for (int dx = lox; dx <= hix; ++dx) {
+          if (gzy + gx[dx + 1] > reach_sq) continue;
           const int xx = (cx + dx + ncx) % ncx;
           const int cc = (zz * ncy + yy) * ncx + xx;
           for (int s = cell_start(cc); s < cell_start(cc + 1); ++s) {
@@ -83,6 +97,18 @@ struct CellVisitor {
         }
       }
     }
+  }
+
+  // Squared distances along axis d from coordinate xd (in cell c of nc) to the cells below,
+  // at, and above c.
+  KOKKOS_INLINE_FUNCTION void face_gaps(double xd, int c, int nc, int d, bool periodic,
+                                        double g[3]) const {
+    g[0] = g[1] = g[2] = 0.0;
+    if (periodic && nc < 3) return;
+    const double w = box.len[d] / nc;
+    const double below = xd - (box.lo[d] + c * w), above = w - below;
+    g[0] = below > 0.0 ? below * below : 0.0;
+    g[2] = above > 0.0 ? above * above : 0.0;
   }
 };
 
@@ -380,8 +406,8 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   auto radius = p.radius;
   const PeriodicBox b = box;
   auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
-  const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles,
-                                     b, skin_,  nc_[0],  nc_[1],     nc_[2]};
+  const CellVisitor<ExecSpace> visit{x,     radius, cell_of, cell_start, cell_particles, b,
+                                     skin_, nc_[0], nc_[1],  nc_[2],     a_max_};
 
   // One stencil sweep counts each particle's partners (and the owned ones, of higher
   // identity) and keeps the first `cap` of them in a scratch row; a scan gives the offsets,
