@@ -377,14 +377,26 @@ struct RowSplit {
   double rx[kChunk], ry[kChunk], rz[kChunk], r2[kChunk];
 };
 
-template <int H>
+template <int H, bool Rot>
 KOKKOS_FORCEINLINE_FUNCTION void split_row(const HostParticleViews& hv, const PeriodicBox& b,
                                            const Body& bi, const HostListRows& list, double* hist,
-                                           int row0, int k0, int k1, RowSplit& t) {
+                                           const HostVec3& fh, const HostVec3& qh, int row0, int k0,
+                                           int k1, RowSplit& t) {
   int far[RowSplit::kChunk];
   int n = 0, apart = 0;
   for (int k = k0; k < k1; ++k) {
     const int j = list.neighbors(k);
+#if !defined(__CUDA_ARCH__)
+    // The touching partners' velocities (and spins) are read and their forces (and torques)
+    // written right after the split: their cache lines are requested now, while the distance
+    // tests run, so that a large packing's misses overlap instead of following each other.
+    __builtin_prefetch(&hv.v(j, 0));
+    __builtin_prefetch(&fh(j, 0), 1);
+    if (Rot) {
+      __builtin_prefetch(&hv.w(j, 0));
+      __builtin_prefetch(&qh(j, 0), 1);
+    }
+#endif
     double rx, ry, rz, r2;
     const bool in = touching(hv, b, bi, j, rx, ry, rz, r2);
     t.k[n] = k, t.j[n] = j;
@@ -413,8 +425,8 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
   const int row0 = H > 0 ? list.pair_begin(i) - kbeg : 0;  // history row of entry k
   for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
     RowSplit t;
-    split_row<H>(hv, b, bi, list, hist, row0, k0,
-                 k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
+    split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
+                      k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
     for (int c = 0; c < t.n; ++c) {
       const int k = t.k[c], j = t.j[c];
       PairState s;
@@ -494,8 +506,8 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
     const int row0 = list.pair_begin(i) - kbeg;  // history row of entry k
     for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
       RowSplit t;
-      split_row<H>(hv, b, bi, list, hist, row0, k0,
-                   k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
+      split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
+                        k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
       for (int c = 0; c < t.n; ++c) {
         const int k = t.k[c], j = t.j[c];
         const Body bj = load_body(hv, j, rot);

@@ -43,10 +43,17 @@ struct CellVisitor {
   // Calls on_neighbor(j) for every partner j of i within the cutoff.
   template <class F>
   KOKKOS_INLINE_FUNCTION void operator()(const int i, F&& on_neighbor) const {
-    candidates(i, [&](int j, bool in) {
-      if (in) on_neighbor(j);
-    });
+    candidates(i, Partners<F>{on_neighbor});
   }
+  // The candidates within the cutoff (a functor: nvcc takes a lambda's call operator in a
+  // host-device function for a host function).
+  template <class F>
+  struct Partners {
+    F& on_neighbor;
+    KOKKOS_INLINE_FUNCTION void operator()(int j, bool in) const {
+      if (in) on_neighbor(j);
+    }
+  };
   // Calls on_candidate(j, in) for every particle j != i of i's stencil, in the same order,
   // `in` telling whether j is within the cutoff: a host sweep can then keep its partners
   // without a branch per candidate.
