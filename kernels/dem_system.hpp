@@ -43,6 +43,9 @@ struct DemParams {
                                   // evaluation use it; false: contact by contact (tests)
   bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
                                              // contacts (the earlier mapping, for comparison)
+  int force_slabs = 0;      // host one-pass kernel: slabs along z (0: automatic, six; at most
+                            // a third of them run at once, see NeighborList::set_partition)
+  int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -74,7 +77,8 @@ class DemSystem {
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
     check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
-    nl_.keep_mirror(false);    // the indices the first build makes (size_pair_buffer)
+    nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
+    nl_.keep_mirror(false);  // the indices the first build makes (size_pair_buffer)
     nl_.keep_pair_index(two_pass());
     rebuild();
     forces(0.0);  // initial forces: no spring increment for a step not taken

@@ -35,6 +35,7 @@ struct CellVisitor {
   Kokkos::View<double* [3], mem> x;
   Kokkos::View<double*, mem> radius;
   Kokkos::View<int*, mem> cell_of, cell_start, cell_particles;
+  Kokkos::View<int*, mem> cell_rank;  // z-y-x cell index -> position in the cell order
   PeriodicBox box;
   double skin;
   int ncx, ncy, ncz;
@@ -91,7 +92,7 @@ struct CellVisitor {
         for (int dx = lox; dx <= hix; ++dx) {
           if (gzy + gx[dx + 1] > reach_sq) continue;
           const int xx = (cx + dx + ncx) % ncx;
-          const int cc = (zz * ncy + yy) * ncx + xx;
+          const int cc = cell_rank((zz * ncy + yy) * ncx + xx);
           for (int s = cell_start(cc); s < cell_start(cc + 1); ++s) {
             const int j = cell_particles(s);
             if (j == i) continue;
@@ -169,8 +170,9 @@ class NeighborList {
     else if (!pair_index_valid_ && offsets_.extent(0) > 0)
       build_pair_index(static_cast<int>(owned_end_.extent(0)));
   }
-  // Particles in cell order (cells in z, y, x lexicographic order; identity order inside a
-  // cell): particles of a cell and of its x-neighbours sit close in memory.
+  // Particles in cell order (slab by slab, each slab in blocks of cell rows along y swept in
+  // z, y, x order; identity order inside a cell, see set_partition): a particle's partners
+  // sit close to it in memory.
   const int_view& cell_order() const { return cell_particles_; }
   // Slabs for the one-pass force kernel of host backends: slab s holds the particles
   // cell_order()(slab_begin()(s)) .. cell_order()(slab_begin()(s + 1) - 1), whole layers of
@@ -179,6 +181,31 @@ class NeighborList {
   // count is a multiple of 3 (or 1), so slabs 3 apart never share a particle's neighbours.
   const int_view& slab_begin() const { return slab_begin_; }  // num_slabs() + 1
   int num_slabs() const { return num_slabs_; }
+  // Position of each cell (indexed (cz * ncy + cy) * ncx + cx) in the cell order.
+  const int_view& cell_rank() const { return cell_rank_; }
+
+  // The cell order and the host force pass's partition, chosen from the box alone (so every
+  // sum keeps one order for any thread count). `slabs`: how many slabs along z (0: six, two
+  // per round; more let more threads work in each round, at the cost of locality: a slab's
+  // outer layers are read again in the rounds of its neighbours); a count the box cannot
+  // hold is lowered to one it can. `block_rows`: the height along y of the blocks each slab
+  // is swept in. Both change the order of the force sums, so the last bits of a trajectory.
+  void set_partition(int slabs, int block_rows) {
+    if (slabs < 0 || block_rows < 1)
+      throw InputError(
+          "neighbour list partition: slabs must be >= 0 (0: automatic) and "
+          "block rows >= 1");
+    slabs_wanted_ = slabs, block_rows_ = block_rows;
+  }
+  // The slab count used for `layers` cell layers along z: each slab at least one layer thick,
+  // a multiple of 3 on a periodic axis (the first and last slabs are neighbours there, and
+  // the three rounds need slabs three apart to share no particle), 1 when there are too few.
+  static int slab_count(int layers, bool periodic, int wanted) {
+    int slabs = wanted > 0 ? wanted : 6;
+    slabs = std::min(slabs, layers);
+    if (periodic) slabs = (slabs / 3) * 3;
+    return slabs < 3 ? 1 : slabs;
+  }
 
   // Build from scratch. Records the reference positions and box for the skin criterion.
   // `in_cell_order`: the caller has just called bin() on these positions and put the
@@ -258,9 +285,10 @@ class NeighborList {
   int num_pairs_ = 0;
   bool keep_mirror_ = true, mirror_valid_ = false;
   bool keep_pair_index_ = false, pair_index_valid_ = false;
-  int_view cell_of_, cell_start_, cell_count_, cell_particles_;
+  int_view cell_of_, cell_start_, cell_count_, cell_particles_, cell_rank_;
   int_view slab_begin_;
   int num_slabs_ = 0;
+  int slabs_wanted_ = 0, block_rows_ = 4;
   static constexpr int kMaxScratch = 64;
   int scratch_cap_ = 24;  // the first build's guess; later ones follow the mean row
   int nc_[3] = {1, 1, 1};
@@ -302,6 +330,7 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
   if (static_cast<int>(cell_count_.extent(0)) != ncells) {
     cell_count_ = int_view("neighbor::cell_count", ncells);
     cell_start_ = int_view("neighbor::cell_start", ncells + 1);
+    cell_rank_ = int_view("neighbor::cell_rank", ncells);
   }
   if (static_cast<int>(cell_of_.extent(0)) != n) {
     cell_of_ = int_view("neighbor::cell_of", n);
@@ -311,10 +340,33 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
     x_ref_ = typename Particles<ExecSpace>::vec_view("neighbor::x_ref", n);
   }
   auto cell_of = cell_of_, cell_start = cell_start_, cell_count = cell_count_;
-  auto cell_particles = cell_particles_;
+  auto cell_particles = cell_particles_, cell_rank = cell_rank_;
   const PeriodicBox b = box;
   const int ncx = nc[0], ncy = nc[1], ncz = nc[2];
   const double clx = cell_len[0], cly = cell_len[1], clz = cell_len[2];
+  // Slabs of whole cell layers along z (see slab_begin()). On a periodic axis the first and
+  // last slabs are neighbours, so the count must be a multiple of 3 for the three rounds.
+  const int layers = nc[2];
+  const int slabs = slab_count(layers, b.periodic[2], slabs_wanted_);
+  if (static_cast<int>(slab_begin_.extent(0)) != slabs + 1)
+    slab_begin_ = int_view("neighbor::slab_begin", slabs + 1);
+  num_slabs_ = slabs;
+  // Cell order: slab by slab; inside a slab, blocks of `by` cell rows along y, each block
+  // swept in z, y, x order. A partner then lies a few blocks' worth of cells away in memory,
+  // not a whole layer: the sweep's working set fits the core's own cache.
+  const int by = block_rows_;
+  Kokkos::parallel_for(
+      "neighbor::NeighborList::cell_rank", Kokkos::RangePolicy<ExecSpace>(0, ncells),
+      KOKKOS_LAMBDA(const int c) {
+        const int cx = c % ncx, cy = (c / ncx) % ncy, cz = c / (ncx * ncy);
+        // Slab s holds layers s * layers / slabs .. (s + 1) * layers / slabs - 1.
+        const int s = ((cz + 1) * slabs + layers - 1) / layers - 1;
+        const int z0 = static_cast<int>(static_cast<long>(s) * layers / slabs);
+        const int z1 = static_cast<int>(static_cast<long>(s + 1) * layers / slabs);
+        const int y0 = (cy / by) * by;
+        const int h = ncy - y0 < by ? ncy - y0 : by;
+        cell_rank(c) = (z0 * ncy + y0 * (z1 - z0) + (cz - z0) * h + (cy - y0)) * ncx + cx;
+      });
 
   Kokkos::deep_copy(cell_count, 0);
   Kokkos::parallel_for(
@@ -328,7 +380,7 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
         cz = cz < 0 ? 0 : (cz >= ncz ? ncz - 1 : cz);
         const int c = (cz * ncy + cy) * ncx + cx;
         cell_of(i) = c;
-        Kokkos::atomic_increment(&cell_count(c));
+        Kokkos::atomic_increment(&cell_count(cell_rank(c)));
       });
   Kokkos::parallel_scan(
       "neighbor::NeighborList::cell_scan", Kokkos::RangePolicy<ExecSpace>(0, ncells + 1),
@@ -340,7 +392,7 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
   Kokkos::parallel_for(
       "neighbor::NeighborList::fill_cells", Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i) {
-        const int c = cell_of(i);
+        const int c = cell_rank(cell_of(i));
         const int slot = Kokkos::atomic_fetch_add(&cell_count(c), 1);
         cell_particles(cell_start(c) + slot) = i;
       });
@@ -366,17 +418,6 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
 
   for (int d = 0; d < 3; ++d) nc_[d] = nc[d];
 
-  // Slabs of whole cell layers along z (see slab_begin()). On a periodic axis the first and
-  // last slabs are neighbours, so the count must be a multiple of 3 for the three rounds.
-  const int layers = ncz;
-  int slabs = b.periodic[2] ? (layers / 3) * 3 : layers;
-  // An even number of slabs per round splits evenly between 2, 4, ... threads; thicker
-  // slabs are as valid, and the partition still depends on the box alone.
-  if (slabs >= 12 && (slabs / 3) % 2 == 1) slabs -= b.periodic[2] ? 3 : 1;
-  if (slabs < 3) slabs = 1;
-  if (static_cast<int>(slab_begin_.extent(0)) != slabs + 1)
-    slab_begin_ = int_view("neighbor::slab_begin", slabs + 1);
-  num_slabs_ = slabs;
   auto slab_begin = slab_begin_;
   const int cells_per_layer = ncx * ncy;
   Kokkos::parallel_for(
@@ -392,11 +433,13 @@ void NeighborList<ExecSpace>::relabel_cells(int n) {
   if (static_cast<int>(cell_of_.extent(0)) != n)
     throw std::logic_error("NeighborList::build(in_cell_order) without a bin() before it");
   auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
+  auto cell_rank = cell_rank_;
   const int ncells = static_cast<int>(cell_start.extent(0)) - 1;
   Kokkos::parallel_for(
       "neighbor::NeighborList::relabel", Kokkos::RangePolicy<ExecSpace>(0, ncells),
       KOKKOS_LAMBDA(const int c) {
-        for (int q = cell_start(c); q < cell_start(c + 1); ++q)
+        const int r = cell_rank(c);
+        for (int q = cell_start(r); q < cell_start(r + 1); ++q)
           cell_of(q) = c, cell_particles(q) = q;
       });
 }
@@ -413,8 +456,8 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   auto radius = p.radius;
   const PeriodicBox b = box;
   auto cell_of = cell_of_, cell_start = cell_start_, cell_particles = cell_particles_;
-  const CellVisitor<ExecSpace> visit{x,     radius, cell_of, cell_start, cell_particles, b,
-                                     skin_, nc_[0], nc_[1],  nc_[2],     a_max_};
+  const CellVisitor<ExecSpace> visit{x, radius, cell_of, cell_start, cell_particles, cell_rank_,
+                                     b, skin_,  nc_[0],  nc_[1],     nc_[2],         a_max_};
 
   // One stencil sweep counts each particle's partners (and the owned ones, of higher
   // identity) and keeps the first `cap` of them in a scratch row; a scan gives the offsets,

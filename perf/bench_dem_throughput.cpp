@@ -5,11 +5,13 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--thread-per-particle]
+//                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
+// --slabs / --block-rows: the host force pass's partition and the cell order
+// (DemParams::force_slabs, cell_block_rows; they change the order of the force sums).
 // --no-triad skips the bandwidth measurements, triad and copy (their 768 MiB of arrays would
 // also dominate the peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
@@ -96,6 +98,7 @@ int main(int argc, char** argv) {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
     bool triad = true, batched = true, per_particle = false;
+    int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -125,6 +128,10 @@ int main(int argc, char** argv) {
         batched = false;
       else if (a == "--thread-per-particle")
         per_particle = true;
+      else if (a == "--slabs")
+        slabs = std::stoi(next());
+      else if (a == "--block-rows")
+        block_rows = std::stoi(next());
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
@@ -145,6 +152,8 @@ int main(int argc, char** argv) {
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
     result["batched_contacts"] = batched && cpu_has_avx();
+    result["force_slabs"] = slabs == 0 ? Json("automatic") : Json(slabs);
+    result["cell_block_rows"] = block_rows;
     if (!forces_by_slabs<Exec>())
       result["contacts_pass"] = per_particle ? "thread per particle" : "thread per contact";
     Json rows = Json::array();
@@ -181,11 +190,13 @@ int main(int argc, char** argv) {
           double z_initial = 0, ekin_initial = 0, z_start = 0, z_end = 0, phi = 0, ekin_start = 0,
                  ekin_end = 0, erot_start = 0, erot_end = 0;
           long builds = 0;
+          int slabs_used = 0;
           double entries = 0;
           for (int r = 0; r < reps; ++r) {
             DemParams prm = bench_params();
             prm.batched_contacts = batched;
             prm.contact_thread_per_particle = per_particle;
+            prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
             if (r == reps - 1) host = HostParticles();
@@ -209,6 +220,7 @@ int main(int argc, char** argv) {
             erot_end = m1.ekin_rot;
             builds = sys.neighbor_list().builds() - builds0;
             entries = sys.neighbor_list().num_entries();
+            slabs_used = sys.neighbor_list().num_slabs();
             if (r == 0) {  // one extra profiled window, not part of the timed figures
               sys.set_profile(&prof);
               sys.step(std::min(steps, 500L));
@@ -273,6 +285,7 @@ int main(int argc, char** argv) {
           row["ekin_translational_after_timed_run_J"] = (ekin_end - erot_end) * 1e-3;
           row["neighbors_per_particle_full_list"] = nb;
           row["neighbor_builds_in_timed_window"] = builds;
+          if (forces_by_slabs<Exec>()) row["force_slabs"] = slabs_used;
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;
           row["bytes_per_particle_step"] = bytes;

@@ -187,6 +187,69 @@ TYPED_TEST(NeighborListTest, MatchesBruteForceInAWalledBoxAndAlongAnAxisOfTwoCel
   EXPECT_GT(pairs, static_cast<size_t>(p.n));  // the comparison is not vacuous
 }
 
+// The cell order (slabs along z, blocks of cell rows along y inside each) is a relabelling of
+// the cells: every cell keeps one position of its own, whatever the partition, and the list is
+// the brute-force one; every listed pair joins particles of the same or adjacent slabs (what
+// lets the three rounds of the host force pass scatter without races).
+TYPED_TEST(NeighborListTest, EveryCellOrderIsAPermutationOfTheCellsAndListsEveryPairOnce) {
+  using Exec = TypeParam;
+  const double skin = 0.3;
+  struct Partition {
+    int slabs, rows;
+  };
+  for (const bool periodic_z : {true, false})
+    for (const Partition part : {Partition{0, 4}, Partition{0, 1}, Partition{3, 2}, Partition{7, 3},
+                                 Partition{100, 1000}, Partition{1, 5}}) {
+      PeriodicBox box;
+      auto p = gas<Exec>(box, 1500, 0.3);
+      box.periodic[2] = periodic_z;
+      NeighborList<Exec> nl(skin);
+      nl.set_partition(part.slabs, part.rows);
+      nl.build(p, box);
+      const std::string where = std::string(periodic_z ? "periodic" : "walled") + " z, slabs " +
+                                std::to_string(part.slabs) + ", rows " + std::to_string(part.rows);
+      const auto hs = Kokkos::HostSpace();
+      auto rank = Kokkos::create_mirror_view_and_copy(hs, nl.cell_rank());
+      const int ncells = static_cast<int>(rank.extent(0));
+      ASSERT_GE(ncells, 27) << where;
+      std::vector<int> seen(ncells, 0);
+      for (int c = 0; c < ncells; ++c) {
+        ASSERT_GE(rank(c), 0) << where;
+        ASSERT_LT(rank(c), ncells) << where;
+        ++seen[rank(c)];
+      }
+      EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), ncells) << where;
+      const int slabs = nl.num_slabs();
+      if (periodic_z && slabs > 1) {
+        EXPECT_EQ(slabs % 3, 0) << where;
+      }
+      if (part.slabs > 0 && part.slabs <= 3) {
+        EXPECT_EQ(slabs, part.slabs == 3 ? 3 : 1) << where;
+      }
+      EXPECT_EQ(listed(nl, p.n), brute_force(p, box, skin)) << where;
+      auto begin = Kokkos::create_mirror_view_and_copy(hs, nl.slab_begin());
+      auto order = Kokkos::create_mirror_view_and_copy(hs, nl.cell_order());
+      auto off = Kokkos::create_mirror_view_and_copy(hs, nl.offsets());
+      auto nb = Kokkos::create_mirror_view_and_copy(hs, nl.neighbors());
+      std::vector<int> slab_of(p.n, -1);
+      for (int s = 0; s < slabs; ++s)
+        for (int q = begin(s); q < begin(s + 1); ++q) slab_of[order(q)] = s;
+      long across = 0;
+      for (int i = 0; i < p.n; ++i) {
+        ASSERT_GE(slab_of[i], 0) << where;
+        for (int k = off(i); k < off(i + 1); ++k) {
+          const int d = std::abs(slab_of[i] - slab_of[nb(k)]);
+          const int gap = periodic_z ? std::min(d, slabs - d) : d;
+          ASSERT_LE(gap, 1) << where;
+          across += gap;
+        }
+      }
+      if (slabs > 1) {
+        EXPECT_GT(across, 0) << where << ": no pair crosses a slab face, the check is vacuous";
+      }
+    }
+}
+
 TYPED_TEST(NeighborListTest, SkinCriterionNeverMissesATouchingPair) {
   using Exec = TypeParam;
   PeriodicBox box;
