@@ -43,8 +43,8 @@ struct DemParams {
                                   // evaluation use it; false: contact by contact (tests)
   bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
                                              // contacts (the earlier mapping, for comparison)
-  int force_slabs = 0;      // host one-pass kernel: slabs along z (0: automatic, six; at most
-                            // a third of them run at once, see NeighborList::set_partition)
+  int force_slabs = 0;      // host one-pass kernel: slabs along z (0: default_force_slabs(),
+                            // six; a third of them run at once, see NeighborList::set_partition)
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
 };
 

@@ -22,6 +22,7 @@
 #include "core/box.hpp"
 #include "core/error.hpp"
 #include "core/particles.hpp"
+#include "kernels/force_slabs.hpp"
 #include "kernels/view_io.hpp"
 
 namespace granular {
@@ -185,9 +186,9 @@ class NeighborList {
   const int_view& cell_rank() const { return cell_rank_; }
 
   // The cell order and the host force pass's partition, chosen from the box alone (so every
-  // sum keeps one order for any thread count). `slabs`: how many slabs along z (0: six, two
-  // per round; more let more threads work in each round, at the cost of locality: a slab's
-  // outer layers are read again in the rounds of its neighbours); a count the box cannot
+  // sum keeps one order for any thread count). `slabs`: how many slabs along z (0:
+  // default_force_slabs(); more let more threads work in each round, at the cost of locality: a
+  // slab's outer layers are read again in the rounds of its neighbours); a count the box cannot
   // hold is lowered to one it can. `block_rows`: the height along y of the blocks each slab
   // is swept in. Both change the order of the force sums, so the last bits of a trajectory.
   void set_partition(int slabs, int block_rows) {
@@ -201,7 +202,7 @@ class NeighborList {
   // a multiple of 3 on a periodic axis (the first and last slabs are neighbours there, and
   // the three rounds need slabs three apart to share no particle), 1 when there are too few.
   static int slab_count(int layers, bool periodic, int wanted) {
-    int slabs = wanted > 0 ? wanted : 6;
+    int slabs = wanted > 0 ? wanted : default_force_slabs();
     slabs = std::min(slabs, layers);
     if (periodic) slabs = (slabs / 3) * 3;
     return slabs < 3 ? 1 : slabs;

@@ -9,6 +9,7 @@
 #include "core/output.hpp"
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
+#include "kernels/force_slabs.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   bool quiet = false, resume = false;
   double stop_after_minutes = 0;
+  int force_slabs = 0;
   run->add_option("scene", scene_path, "scene file (TOML)")->required()->check(CLI::ExistingFile);
   run->add_option("--out", out_dir, "output directory (default out/<scene file name>)");
   run->add_option("--threads", threads, "host threads (default: all cores)")
@@ -48,6 +50,10 @@ int main(int argc, char** argv) {
                   "stop at the first checkpoint after this wall time (elastic_moduli); "
                   "continue with --resume")
       ->check(CLI::NonNegativeNumber);
+  run->add_option("--force-slabs", force_slabs,
+                  "slabs of the host force pass (default 6; a third of them run at once: with "
+                  "more than two threads use 3 x threads; changes the last bits of the sums)")
+      ->check(CLI::Range(3, 100000));
 
   auto* check =
       app.add_subcommand("check", "read and check every key of a scene file, run nothing");
@@ -103,6 +109,17 @@ int main(int argc, char** argv) {
     args.device_id = granular::ensemble::local_rank() % devices;
 #endif
   Kokkos::initialize(args);
+  if (force_slabs > 0) granular::default_force_slabs() = force_slabs;
+#ifndef KOKKOS_ENABLE_CUDA
+  {
+    const int host_threads = Kokkos::DefaultHostExecutionSpace().concurrency();
+    if (root && run->parsed() && !quiet && host_threads > granular::default_force_slabs() / 3)
+      std::cerr << "note: the force pass splits the box into " << granular::default_force_slabs()
+                << " slabs, " << granular::default_force_slabs() / 3 << " at a time; with "
+                << host_threads << " threads add --force-slabs " << 3 * host_threads
+                << " (the sums then differ in their last bits)\n";
+  }
+#endif
   int rc = 0;
   try {
     const bool checking = check->parsed();

@@ -178,3 +178,24 @@ TYPED_TEST(SlabForcesTest, SlabsPartitionTheParticlesAndEveryListedPairJoinsAdja
     EXPECT_GT(pairs, static_cast<long>(p.n));
   }
 }
+
+// A count asked for by the process (granular run --force-slabs) applies where a list has none
+// of its own, lowered to what the box can hold (a multiple of 3 on a periodic axis).
+TYPED_TEST(SlabForcesTest, ProcessWideSlabCountAppliesWhereAListHasNone) {
+  using Exec = TypeParam;
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 3000, 0.35);
+  auto p = Particles<Exec>::from_host(h);
+  const int saved = default_force_slabs();
+  NeighborList<Exec> nl(0.2), own(0.2);
+  own.set_partition(3, 4);
+  default_force_slabs() = 10;  // no multiple of 3: lowered to 9 on the periodic axis
+  nl.build(p, box);
+  own.build(p, box);
+  default_force_slabs() = saved;
+  EXPECT_EQ(nl.num_slabs(), 9);
+  EXPECT_EQ(own.num_slabs(), 3);
+  NeighborList<Exec> plain(0.2);
+  plain.build(p, box);
+  EXPECT_EQ(plain.num_slabs(), saved);
+}

@@ -18,6 +18,7 @@
 #include "core/ensemble.hpp"
 #include "core/error.hpp"
 #include "granular_config.hpp"
+#include "kernels/force_slabs.hpp"
 
 namespace granular {
 namespace fs = std::filesystem;
@@ -116,6 +117,8 @@ Json run_record(double wall_seconds, const std::string& status, const std::strin
   // MPI ranks the run was spread over (each with `threads` threads); hostname and threads
   // are rank 0's.
   r["ranks"] = ensemble::size();
+  // The host force pass's slab count orders its sums (the last bits of every trajectory).
+  r["force_slabs"] = default_force_slabs();
   r["execution_space"] = Kokkos::DefaultExecutionSpace::name();
   const int v = KOKKOS_VERSION;
   r["kokkos_version"] = std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." +
