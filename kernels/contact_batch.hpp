@@ -26,6 +26,7 @@
 #define GRANULAR_CONTACT_BATCH 1
 #define GRANULAR_AVX __attribute__((target("avx")))
 #define GRANULAR_AVX_INLINE __attribute__((target("avx"), always_inline)) inline
+#define GRANULAR_ALWAYS_INLINE __attribute__((always_inline)) inline
 #else
 #define GRANULAR_CONTACT_BATCH 0
 #endif
@@ -38,6 +39,7 @@ template <class Model>
 struct ContactBatchLaw {
   static constexpr bool available = false;
   static bool usable(const Model&) { return false; }
+  static bool uniform(const Model&) { return false; }
 };
 template <>
 struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
@@ -46,6 +48,22 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b)
         if (m.tangential.table.p[a][b].law != CoulombTangential::Constant) return false;
+    return true;
+  }
+  // Whether every pair has the parameters of pair (0, 0), bit for bit (so that broadcasting
+  // them changes no result, not even the sign of a zero).
+  static bool uniform(const ContactModel<LinearNormal, CoulombTangential>& m) {
+    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    const LinearNormal::Params& n0 = m.normal.table.p[0][0];
+    const CoulombTangential::Params& t0 = m.tangential.table.p[0][0];
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        const LinearNormal::Params& n = m.normal.table.p[a][b];
+        const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+        if (!same(n.kn, n0.kn) || !same(n.gn, n0.gn) || !same(t.kt, t0.kt) || !same(t.gt, t0.gt) ||
+            !same(t.mu_s, t0.mu_s) || !same(t.mu_d, t0.mu_d))
+          return false;
+      }
     return true;
   }
 };
@@ -75,6 +93,10 @@ struct ContactBatch {
   using M = long __attribute__((vector_size(32)));
 
   int n = 0, rows = 0;
+  // One parameter set for every pair (a single species, or equal tables): the parameters are
+  // then broadcast from here instead of gathered contact by contact into kn ... mud.
+  bool uniform = false;
+  double ukn = 0, ugn = 0, ukt = 0, ugt = 0, umus = 0, umud = 0;
   int row_i[kCap], row_end[kCap];
   int j[kCap], k[kCap];
   // Inputs: geometry and relative motion, radii, spins, parameters, the spring.
@@ -99,12 +121,53 @@ struct ContactBatch {
   GRANULAR_AVX_INLINE static void store(double* a, V v) { std::memcpy(a, &v, sizeof v); }
   GRANULAR_AVX_INLINE static V splat(double x) { return V{x, x, x, x}; }
   GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return m ? a : b; }
+  // Whether any / every lane of a comparison holds. The square roots and divisions of the
+  // rare branches (a spring far out of the tangent plane, a sliding contact) are the slowest
+  // instructions of a lane: a vector none of whose lanes takes the branch skips them.
+  GRANULAR_AVX_INLINE static int lanes(M m) { return __builtin_ia32_movmskpd256((V)m); }
+  GRANULAR_AVX_INLINE static bool any(M m) { return lanes(m) != 0; }
+  GRANULAR_AVX_INLINE static bool all(M m) { return lanes(m) == 0xf; }
+  // A pair parameter of four lanes: broadcast (uniform) or loaded from the slots at a.
+  template <bool Uniform>
+  GRANULAR_AVX_INLINE static V par(const double* a, double u) {
+    if constexpr (Uniform)
+      return splat(u);
+    else
+      return load(a);
+  }
   // The correctly rounded square root of each lane, as the scalar law takes it.
   GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
 
+  // Every pair takes (pn, pt) from now on: no per-contact parameters are stored.
+  void set_uniform(const LinearNormal::Params& pn, const CoulombTangential::Params& pt) {
+    uniform = true;
+    ukn = pn.kn, ugn = pn.gn, ukt = pt.kt, ugt = pt.gt, umus = pt.mu_s, umud = pt.mu_d;
+  }
+
+  // Slot c's motion, given its separation (rx, ry, rz) already in place: the touching contact
+  // of bi (the owner) with bj in a flow of rate r3, and its stored spring h; the relative
+  // velocity is formed as pair_geometry forms it.
+  template <class Body>
+  GRANULAR_ALWAYS_INLINE void set_motion(int c, const Body& bi, const Body& bj, const double r3[3],
+                                         const double* h) {
+    dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx[c];
+    dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry[c];
+    dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz[c];
+    ai[c] = bi.a, aj[c] = bj.a;
+    wi0[c] = bi.w[0], wi1[c] = bi.w[1], wi2[c] = bi.w[2];
+    wj0[c] = bj.w[0], wj1[c] = bj.w[1], wj2[c] = bj.w[2];
+    h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
+  }
+  // Slot c's pair parameters (unless uniform).
+  GRANULAR_ALWAYS_INLINE void set_params(int c, const LinearNormal::Params& pn,
+                                         const CoulombTangential::Params& pt) {
+    kn[c] = pn.kn, gn[c] = pn.gn;
+    kt[c] = pt.kt, gt[c] = pt.gt, mus[c] = pt.mu_s, mud[c] = pt.mu_d;
+  }
+
   // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
   // separation (rx, ry, rz), |r|^2 = r2, in a flow of rate r3, with its pair's parameters
-  // and stored spring h; the relative velocity is formed as pair_geometry forms it.
+  // and stored spring h.
   template <class Body>
   void push(const Body& bi, const Body& bj, int j_, int k_, double rx_, double ry_, double rz_,
             double r2_, const double r3[3], const LinearNormal::Params& pn,
@@ -112,15 +175,8 @@ struct ContactBatch {
     const int c = n++;
     j[c] = j_, k[c] = k_;
     rx[c] = rx_, ry[c] = ry_, rz[c] = rz_, r2[c] = r2_;
-    dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx_;
-    dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry_;
-    dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz_;
-    ai[c] = bi.a, aj[c] = bj.a;
-    wi0[c] = bi.w[0], wi1[c] = bi.w[1], wi2[c] = bi.w[2];
-    wj0[c] = bj.w[0], wj1[c] = bj.w[1], wj2[c] = bj.w[2];
-    kn[c] = pn.kn, gn[c] = pn.gn;
-    kt[c] = pt.kt, gt[c] = pt.gt, mus[c] = pt.mu_s, mud[c] = pt.mu_d;
-    h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
+    set_motion(c, bi, bj, r3, h);
+    set_params(c, pn, pt);
   }
 
   // Pads the last vector with copies of the last contact (evaluated, never scattered).
@@ -136,8 +192,16 @@ struct ContactBatch {
   // the torques. The operations follow pair_geometry, LinearNormal::force,
   // CoulombTangential::force (rotate_into_plane, coulomb_spring) and ContactModel::evaluate.
   // Only where cpu_has_avx().
-  GRANULAR_AVX void evaluate(double dt) {
+  void evaluate(double dt) {
     pad();
+    if (uniform)
+      evaluate_lanes<true>(dt);
+    else
+      evaluate_lanes<false>(dt);
+  }
+
+  template <bool Uniform>
+  GRANULAR_AVX void evaluate_lanes(double dt) {
     const V one = splat(1.0), zero = splat(0.0), half = splat(0.5), vdt = splat(dt);
     for (int c = 0; c < n; c += kW) {
       const V r = vsqrt(load(r2 + c));
@@ -147,7 +211,7 @@ struct ContactBatch {
       const V delta = a_i + a_j - r;
       const V d0 = load(dv0 + c), d1 = load(dv1 + c), d2 = load(dv2 + c);
       const V vn = d0 * n0 + d1 * n1 + d2 * n2;
-      const V fn = load(kn + c) * delta + load(gn + c) * -vn;
+      const V fn = par<Uniform>(kn + c, ukn) * delta + par<Uniform>(gn + c, ugn) * -vn;
       V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
       const V li = a_i - half * delta, lj = a_j - half * delta;
       const V aw0 = li * load(wi0 + c) + lj * load(wj0 + c);
@@ -163,29 +227,31 @@ struct ContactBatch {
       const V x = sn * sn / sel(empty, one, len_sq);
       const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
       const M small = x < splat(1e-4);
-      const V exact = one / vsqrt(sel(small, one, one - x));
-      const V scale = sel(small, taylor, exact);
+      V scale = taylor;
+      if (!all(small)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
       s0 = sel(empty, s0, (s0 - sn * n0) * scale);
       s1 = sel(empty, s1, (s1 - sn * n1) * scale);
       s2 = sel(empty, s2, (s2 - sn * n2) * scale);
       s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
       // coulomb_spring with k = kt, g = gt.
-      const V k = load(kt + c), g = load(gt + c), nk = -k;
+      const V k = par<Uniform>(kt + c, ukt), g = par<Uniform>(gt + c, ugt), nk = -k;
       V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
       const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
       const V afn = sel(fn < zero, -fn, fn);
-      const V limit = load(mus + c) * afn;
+      const V limit = par<Uniform>(mus + c, umus) * afn;
       const M slides = f_sq > limit * limit;
-      const V fmag = vsqrt(f_sq);
-      const V slide = load(mud + c) * afn;
-      const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
-      const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
-      const M stiff = k > zero;
-      const V kk = sel(stiff, k, one);
-      s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
-      s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
-      s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
-      t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+      if (any(slides)) {
+        const V fmag = vsqrt(f_sq);
+        const V slide = par<Uniform>(mud + c, umud) * afn;
+        const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
+        const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
+        const M stiff = k > zero;
+        const V kk = sel(stiff, k, one);
+        s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
+        s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
+        s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
+        t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+      }
       store(h0 + c, s0), store(h1 + c, s1), store(h2 + c, s2);
       F0 += t0, F1 += t1, F2 += t2;
       // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.

@@ -369,20 +369,28 @@ KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
 // order, with the separation found by the distance test) and its apart ones. In a dense
 // packing whether a listed pair touches is close to a coin toss, so a branch per entry was
 // mispredicted about every other time; the split stores every entry and advances a count
-// instead, and the apart entries' histories are forgotten after it.
+// instead, and the apart entries' histories are forgotten after it. The touching entries go
+// to the arrays of `SplitOut` (list entry k, partner j, separation, squared distance): a
+// RowSplit's for the contact-by-contact rows, the batch's own slots for the batched ones.
+struct SplitOut {
+  static constexpr int kMax = 64;  // entries per split at most
+  int *k, *j;
+  double *rx, *ry, *rz, *r2;
+};
 struct RowSplit {
   static constexpr int kChunk = 32;  // entries per stretch
-  int n = 0;                         // touching entries
   int k[kChunk], j[kChunk];
   double rx[kChunk], ry[kChunk], rz[kChunk], r2[kChunk];
+  SplitOut out() { return {k, j, rx, ry, rz, r2}; }
 };
 
+// Splits entries k0 .. k1 - 1 (at most SplitOut::kMax) and returns how many touch.
 template <int H, bool Rot>
-KOKKOS_FORCEINLINE_FUNCTION void split_row(const HostParticleViews& hv, const PeriodicBox& b,
-                                           const Body& bi, const HostListRows& list, double* hist,
-                                           const HostVec3& fh, const HostVec3& qh, int row0, int k0,
-                                           int k1, RowSplit& t) {
-  int far[RowSplit::kChunk];
+KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const PeriodicBox& b,
+                                          const Body& bi, const HostListRows& list, double* hist,
+                                          const HostVec3& fh, const HostVec3& qh, int row0, int k0,
+                                          int k1, const SplitOut& t) {
+  int far[SplitOut::kMax];
   int n = 0, apart = 0;
   for (int k = k0; k < k1; ++k) {
     const int j = list.neighbors(k);
@@ -405,8 +413,8 @@ KOKKOS_FORCEINLINE_FUNCTION void split_row(const HostParticleViews& hv, const Pe
     n += in;
     apart += !in;
   }
-  t.n = n;
   for (int a = 0; a < apart; ++a) forget_history<H>(hist, row0 + far[a]);
+  return n;
 }
 
 // One owner row of the one-pass kernel below: particle i evaluates the contacts it owns,
@@ -425,9 +433,10 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
   const int row0 = H > 0 ? list.pair_begin(i) - kbeg : 0;  // history row of entry k
   for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
     RowSplit t;
-    split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
-                      k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
-    for (int c = 0; c < t.n; ++c) {
+    const int touching =
+        split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
+                          k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t.out());
+    for (int c = 0; c < touching; ++c) {
       const int k = t.k[c], j = t.j[c];
       PairState s;
       pair_geometry(bi, load_body(hv, j, rot), t.rx[c], t.ry[c], t.rz[c], t.r2[c], r3, rot, s);
@@ -466,7 +475,10 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
   static_assert(H == 3 && rot, "the batched law has a tangential spring");
+  static_assert(ContactBatch::kCap <= SplitOut::kMax, "a batch-sized row must fit one split");
   ContactBatch cb;
+  if (ContactBatchLaw<Model>::uniform(m))
+    cb.set_uniform(m.normal.table(0, 0), m.tangential.table(0, 0));
   auto flush = [&] {
     cb.evaluate(dt);
     int c = 0;
@@ -504,16 +516,17 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
     }
     const Body bi = load_body(hv, i, rot);
     const int row0 = list.pair_begin(i) - kbeg;  // history row of entry k
-    for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
-      RowSplit t;
-      split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
-                        k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t);
-      for (int c = 0; c < t.n; ++c) {
-        const int k = t.k[c], j = t.j[c];
-        const Body bj = load_body(hv, j, rot);
-        cb.push(bi, bj, j, row0 + k, t.rx[c], t.ry[c], t.rz[c], t.r2[c], r3,
-                m.normal.table(bi.s, bj.s), m.tangential.table(bi.s, bj.s), hist + (row0 + k) * H);
-      }
+    // The row's touching entries land in the batch's slots directly (the flush above left
+    // room for the whole row).
+    const int c0 = cb.n;
+    const SplitOut slots{cb.k + c0, cb.j + c0, cb.rx + c0, cb.ry + c0, cb.rz + c0, cb.r2 + c0};
+    cb.n += split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, kbeg, kend, slots);
+    for (int c = c0; c < cb.n; ++c) {
+      const int r = row0 + cb.k[c];  // history row
+      cb.k[c] = r;
+      const Body bj = load_body(hv, cb.j[c], rot);
+      cb.set_motion(c, bi, bj, r3, hist + r * H);
+      if (!cb.uniform) cb.set_params(c, m.normal.table(bi.s, bj.s), m.tangential.table(bi.s, bj.s));
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
   }

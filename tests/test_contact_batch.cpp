@@ -121,6 +121,27 @@ TYPED_TEST(ContactBatchTest, BatchedFrictionalContactsGiveBitwiseTheContactByCon
   }
 }
 
+// One parameter set for every pair: the batch broadcasts it instead of gathering it.
+TYPED_TEST(ContactBatchTest, BroadcastParametersOfOneSpeciesGiveBitwiseTheScalarTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<Friction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    const Friction one{
+        LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.4), {}};
+    ASSERT_TRUE(ContactBatchLaw<Friction>::uniform(one));
+    ASSERT_FALSE(ContactBatchLaw<Friction>::uniform(two_species_friction()));
+    Friction signed_zero = one;  // equal as numbers, not as bits: not broadcast
+    for (auto& row : signed_zero.normal.table.p)
+      for (auto& pair : row) pair.gn = 0.0;
+    ASSERT_TRUE(ContactBatchLaw<Friction>::uniform(signed_zero));
+    signed_zero.normal.table.p[1][1].gn = -0.0;
+    EXPECT_FALSE(ContactBatchLaw<Friction>::uniform(signed_zero));
+    compare_compression<Exec>(one);
+  }
+}
+
 // A large sphere among small ones owns more neighbour entries than a batch holds: its row
 // is evaluated contact by contact between batches, in its place in the order.
 TYPED_TEST(ContactBatchTest, CrowdedRowBeyondTheBatchCapacityKeepsBitwiseTheSameForces) {
