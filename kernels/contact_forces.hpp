@@ -381,7 +381,7 @@ struct RowSplit {
   static constexpr int kChunk = 32;  // entries per stretch
   int k[kChunk], j[kChunk];
   double rx[kChunk], ry[kChunk], rz[kChunk], r2[kChunk];
-  SplitOut out() { return {k, j, rx, ry, rz, r2}; }
+  KOKKOS_FORCEINLINE_FUNCTION SplitOut out() { return {k, j, rx, ry, rz, r2}; }
 };
 
 // Splits entries k0 .. k1 - 1 (at most SplitOut::kMax) and returns how many touch.
