@@ -3,6 +3,7 @@
 // stop on a typo.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -10,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
+#include "scenarios/moduli/moduli_setup.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"
 
@@ -49,5 +51,55 @@ TEST(ModuliSceneFiles, UnsupportedProbeOrientationsNamesKeyAndFile) {
     const std::string what = e.what();
     EXPECT_NE(what.find("probe.orientations"), std::string::npos) << what;
     EXPECT_NE(what.find("bad_orientations.toml"), std::string::npos) << what;
+  }
+}
+
+// preparation.dt gives each k_c variant its own time step; every step count of the protocol is
+// rescaled so that it spans the same physical time (the probe's strain rate and relaxation
+// time, the relaxation cap), and a list that does not match preparation.kc is refused.
+TEST(ModuliSceneFiles, PerVariantTimeStepKeepsEveryPhysicalDurationOfTheProtocol) {
+  const std::string path = granular::testing::shipped_scene_path("cohesion_list.toml");
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  auto setup = [](const std::string& t, const std::string& name) {
+    SceneFile f = SceneFile::parse(t, name);
+    f.text("scene");
+    return moduli_study::read_setup(f);
+  };
+  const moduli_study::Setup s = setup(text, "cohesion_list.toml");
+  ASSERT_EQ(s.variants.size(), 4u);
+  for (const moduli_study::PrepVariant& v : s.variants) {
+    ASSERT_FALSE(std::isnan(v.dt));
+    const moduli_study::Setup r = moduli_study::for_variant(s, v);
+    EXPECT_EQ(r.params.dt, v.dt);
+    const double base = s.params.dt;
+    // Durations equal to within one step's rounding.
+    EXPECT_NEAR(r.strain_steps * r.params.dt, s.strain_steps * base, 0.5 * r.params.dt);
+    EXPECT_NEAR(r.probe_relax * r.params.dt, s.probe_relax * base, 0.5 * r.params.dt);
+    EXPECT_NEAR(static_cast<double>(r.relax_max) * r.params.dt,
+                static_cast<double>(s.relax_max) * base, 0.5 * r.params.dt);
+    // Everything else is the study's.
+    EXPECT_EQ(r.amplitude, s.amplitude);
+    EXPECT_EQ(r.rate, s.rate);
+    EXPECT_EQ(r.targets, s.targets);
+  }
+  // The variant of k_c = 10 k2 keeps the reference step: its counts are unchanged.
+  const moduli_study::Setup stiff = moduli_study::for_variant(s, s.variants.back());
+  EXPECT_EQ(stiff.strain_steps, s.strain_steps);
+  EXPECT_EQ(stiff.relax_max, s.relax_max);
+
+  std::string bad = text;
+  const size_t at = bad.find("dt = [0.0037, 0.0037, 0.0037, 0.0012]");
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, 37, "dt = [0.0037, 0.0012]");
+  try {
+    setup(bad, "short_dt_list.toml");
+    ADD_FAILURE() << "a preparation.dt list shorter than preparation.kc was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("preparation.dt"), std::string::npos) << what;
+    EXPECT_NE(what.find("short_dt_list.toml"), std::string::npos) << what;
   }
 }

@@ -130,15 +130,24 @@ Setup read_setup(const SceneFile& scene) {
   if (!kcs.empty())
     scene.require(s.contact.normal == "hysteretic", "preparation.kc",
                   "needs contact.normal = \"hysteretic\" (k_c is its adhesive stiffness)");
+  // Time step per k_c: the adhesive branch of a large k_c is the stiffest spring, and only the
+  // variants that have it need the step it forces on them.
+  const std::vector<double> dts = scene.reals("preparation.dt", {});
+  if (!dts.empty())
+    scene.require(dts.size() == kcs.size(), "preparation.dt",
+                  "needs one time step per entry of preparation.kc");
+  for (double d : dts) scene.require(d > 0, "preparation.dt", "must be positive");
   const std::vector<double> mu_list = mus.empty() ? std::vector<double>{kNaN} : mus;
   const std::vector<double> kc_list = kcs.empty() ? std::vector<double>{kNaN} : kcs;
   for (double c : counts)
     for (double sd : seeds)
       for (double mu : mu_list)
-        for (double kc : kc_list) {
+        for (size_t ik = 0; ik < kc_list.size(); ++ik) {
+          const double kc = kc_list[ik];
           PrepVariant v;
           v.count = static_cast<int>(c), v.seed = static_cast<std::uint64_t>(sd), v.mu = mu;
           v.kc = kc;
+          if (!dts.empty()) v.dt = dts[ik];
           char buf[128] = "";
           if (counts.size() > 1 || seeds.size() > 1)
             std::snprintf(buf, sizeof buf, "N%d_seed%d", v.count, static_cast<int>(sd));
@@ -153,6 +162,19 @@ Setup read_setup(const SceneFile& scene) {
         }
   scene.reject_unknown_keys();
   return s;
+}
+
+Setup for_variant(const Setup& s, const PrepVariant& v) {
+  Setup r = s;
+  if (std::isnan(v.dt) || v.dt == s.params.dt) return r;
+  const double scale = s.params.dt / v.dt;
+  auto steps = [&](long n) { return std::max(1L, std::lround(static_cast<double>(n) * scale)); };
+  r.params.dt = v.dt;
+  r.strain_steps = steps(s.strain_steps);
+  r.probe_relax = s.probe_relax > 0 ? steps(s.probe_relax) : 0;
+  r.relax_max = steps(s.relax_max);
+  r.max_strain_steps = steps(s.max_strain_steps);
+  return r;
 }
 
 }  // namespace granular::moduli_study

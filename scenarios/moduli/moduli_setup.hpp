@@ -24,6 +24,7 @@ struct PrepVariant {
   std::uint64_t seed = 1;
   double mu = kNaN;  // preparation friction (NaN: as in [contact])
   double kc = kNaN;  // adhesive stiffness of the hysteretic law (NaN: as in [contact])
+  double dt = kNaN;  // time step of this preparation and its probes (NaN: run.dt)
   std::string tag;   // subdirectory of configs/ and label in the table ("" if only one)
 };
 
@@ -58,5 +59,10 @@ struct Setup {
 
 // Reads every key of the scene (unknown keys are refused) and checks their ranges.
 Setup read_setup(const SceneFile& scene);
+
+// The settings a variant runs with: its own time step (preparation.dt), every step count of
+// the protocol (probe strain and relaxation, the relaxation cap) rescaled so that it spans the
+// same physical time as with run.dt. The rates are physical already.
+Setup for_variant(const Setup& s, const PrepVariant& v);
 
 }  // namespace granular::moduli_study

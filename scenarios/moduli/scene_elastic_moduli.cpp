@@ -134,7 +134,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       make_directories(dir);
       std::vector<double> targets = s.targets;
       const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
-      const bool finished = prepare(s, v, prep, part, progress, done, ck, stop,
+      const Setup sv = for_variant(s, v);
+      const bool finished = prepare(sv, v, prep, part, progress, done, ck, stop,
                                     [&](const ConfigState& c, double ratio, double I) {
                                       // The target this configuration was saved at (the closest
                                       // listed value).
@@ -146,7 +147,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
                                       std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
                                       write_config(dir + name, c);
                                       part.add_config(dir + name);
-                                      analyse(s, c, prep,
+                                      analyse(sv, c, prep,
                                               {{"mu_preparation", mu},
                                                {"kc_preparation", kc},
                                                {"seed", static_cast<double>(v.seed)},
@@ -185,6 +186,14 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       "relaxed configurations written by this run under its output directory (configs/); "
       "they are not part of committed reference outputs: the same command regenerates them";
   summary["table"] = out.rows;
+  bool own_steps = false;
+  for (const PrepVariant& v : s.variants) own_steps = own_steps || !std::isnan(v.dt);
+  if (own_steps)
+    summary["time_step_note"] =
+        "each k_c variant ran with its own time step (preparation.dt, listed with the variant "
+        "under jamming): the one its stiffest spring allows; every step count of the protocol "
+        "(probe strain and relaxation, the relaxation cap) was rescaled to span the same "
+        "physical time as with run.dt, so the rates and durations are the same for all";
   if (!s.loading_branch) {
     // Jamming density per preparation variant from its unloading series.
     const bool hertz = s.contact.normal == "hertz";
@@ -198,6 +207,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       if (!v.tag.empty()) e["tag"] = v.tag;
       e["mu_preparation"] = std::isnan(v.mu) ? Json() : Json(v.mu);
       if (!std::isnan(v.kc)) e["kc_preparation"] = v.kc;
+      if (!std::isnan(v.dt)) e["dt"] = v.dt;
       e["particles"] = v.count;
       e["fit_points"] = j.points;
       e["phi_J"] = std::isnan(j.phi_j) ? Json() : Json(j.phi_j);
