@@ -5,6 +5,7 @@
 // still relaxing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -607,4 +608,32 @@ TEST(SavedConfigurations, CheckpointFingerprintIgnoresLaterKeysAtTheirOldDefault
   EXPECT_NE(moduli_parameters_fingerprint(with("probe.orientations", "3")), f);
   EXPECT_NE(moduli_parameters_fingerprint(with("probe.amplitude", "2e-06")), f);
   EXPECT_NE(moduli_parameters_fingerprint(with("probe.relax_steps", "100")), f);
+}
+
+// A time step per k_c variant (preparation.dt): each variant's preparation series is labelled
+// with its own index (the jamming fit groups by it), and its probe takes the steps that span
+// the duration run.dt's steps would (twice as many at half the step).
+TEST(SavedConfigurations, PerVariantTimeStepLabelsEachSeriesAndKeepsTheProbeDuration) {
+  const auto root = granular::testing::unique_temp_path("granular_variant_dt_test");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  std::string common = kCommon;
+  const std::string linear = "normal = \"linear\"\nkn = 1.0e5\n";
+  ASSERT_NE(common.find(linear), std::string::npos);
+  common.replace(common.find(linear), linear.size(),
+                 "normal = \"hysteretic\"\nk2 = 1.0e5\nk1 = 0.666e5\nkc = 1.0e5\n");
+  const std::string text =
+      std::string(kPrepare) + "kc = [0.0, 1.0e5]\ndt = [0.004, 0.002]\n" + common;
+  opts.out_dir = root.string();
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  const H5Reader h((root / "results.h5").string());
+  const std::vector<double> variant = h.reals("/preparation/variant");
+  ASSERT_FALSE(variant.empty());
+  for (double v : variant) EXPECT_TRUE(v == 0.0 || v == 1.0) << v;
+  EXPECT_NE(std::count(variant.begin(), variant.end(), 0.0), 0);
+  EXPECT_NE(std::count(variant.begin(), variant.end(), 1.0), 0);
+  EXPECT_EQ(h.reals("/table/kc_preparation"), (std::vector<double>{0.0, 1.0e5}));
+  EXPECT_EQ(h.reals("/table/probe_strain_steps"), (std::vector<double>{200.0, 400.0}));
+  std::filesystem::remove_all(root);
 }
