@@ -102,8 +102,10 @@ struct ContactBatch {
   double ukn = 0, ugn = 0, ukt = 0, ugt = 0, umus = 0, umud = 0;
   int row_i[kCap], row_end[kCap];
   int j[kCap], k[kCap];
-  // Inputs: geometry and relative motion, radii, spins, parameters, the spring.
-  alignas(32) double rx[kCap + kW], ry[kCap + kW], rz[kCap + kW], r2[kCap + kW];
+  // Inputs: geometry and relative motion, radii, spins, parameters, the spring. The squared
+  // distance is formed again in the lanes (the scalar law's operations in its order, so the
+  // same bits) rather than stored by the split for every listed pair.
+  alignas(32) double rx[kCap + kW], ry[kCap + kW], rz[kCap + kW];
   alignas(32) double dv0[kCap + kW], dv1[kCap + kW], dv2[kCap + kW];
   alignas(32) double ai[kCap + kW], aj[kCap + kW];
   alignas(32) double wi0[kCap + kW], wi1[kCap + kW], wi2[kCap + kW];
@@ -169,15 +171,15 @@ struct ContactBatch {
   }
 
   // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
-  // separation (rx, ry, rz), |r|^2 = r2, in a flow of rate r3, with its pair's parameters
-  // and stored spring h.
+  // separation (rx, ry, rz) in a flow of rate r3, with its pair's parameters and stored
+  // spring h.
   template <class Body>
   void push(const Body& bi, const Body& bj, int j_, int k_, double rx_, double ry_, double rz_,
-            double r2_, const double r3[3], const LinearNormal::Params& pn,
-            const CoulombTangential::Params& pt, const double* h) {
+            const double r3[3], const LinearNormal::Params& pn, const CoulombTangential::Params& pt,
+            const double* h) {
     const int c = n++;
     j[c] = j_, k[c] = k_;
-    rx[c] = rx_, ry[c] = ry_, rz[c] = rz_, r2[c] = r2_;
+    rx[c] = rx_, ry[c] = ry_, rz[c] = rz_;
     set_motion(c, bi, bj, r3, h);
     set_params(c, pn, pt);
   }
@@ -185,8 +187,8 @@ struct ContactBatch {
   // Pads the last vector with copies of the last contact (evaluated, never scattered).
   void pad() {
     if (n == 0) return;
-    double* arrays[] = {rx,  ry,  rz,  r2, dv0, dv1, dv2, ai,  aj,  wi0, wi1, wi2,
-                        wj0, wj1, wj2, kn, gn,  kt,  gt,  mus, mud, h0,  h1,  h2};
+    double* arrays[] = {rx,  ry,  rz, dv0, dv1, dv2, ai,  aj,  wi0, wi1, wi2, wj0,
+                        wj1, wj2, kn, gn,  kt,  gt,  mus, mud, h0,  h1,  h2};
     for (double* a : arrays)
       for (int c = n; c < (n + kW - 1) / kW * kW; ++c) a[c] = a[n - 1];
   }
@@ -207,9 +209,10 @@ struct ContactBatch {
   GRANULAR_AVX void evaluate_lanes(double dt) {
     const V one = splat(1.0), zero = splat(0.0), half = splat(0.5), vdt = splat(dt);
     for (int c = 0; c < n; c += kW) {
-      const V r = vsqrt(load(r2 + c));
+      const V X = load(rx + c), Y = load(ry + c), Z = load(rz + c);
+      const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
       const V inv = one / r;
-      const V n0 = load(rx + c) * inv, n1 = load(ry + c) * inv, n2 = load(rz + c) * inv;
+      const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
       const V a_i = load(ai + c), a_j = load(aj + c);
       const V delta = a_i + a_j - r;
       const V d0 = load(dv0 + c), d1 = load(dv1 + c), d2 = load(dv2 + c);

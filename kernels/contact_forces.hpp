@@ -370,8 +370,9 @@ KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
 // packing whether a listed pair touches is close to a coin toss, so a branch per entry was
 // mispredicted about every other time; the split stores every entry and advances a count
 // instead, and the apart entries' histories are forgotten after it. The touching entries go
-// to the arrays of `SplitOut` (list entry k, partner j, separation, squared distance): a
-// RowSplit's for the contact-by-contact rows, the batch's own slots for the batched ones.
+// to the arrays of `SplitOut` (list entry k, partner j, separation, squared distance unless
+// R2 is false): a RowSplit's for the contact-by-contact rows, the batch's own slots for the
+// batched ones (which form |r|^2 again in their lanes: one store fewer per listed pair).
 struct SplitOut {
   static constexpr int kMax = 64;  // entries per split at most
   int *k, *j;
@@ -385,7 +386,7 @@ struct RowSplit {
 };
 
 // Splits entries k0 .. k1 - 1 (at most SplitOut::kMax) and returns how many touch.
-template <int H, bool Rot>
+template <int H, bool Rot, bool R2 = true>
 KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const PeriodicBox& b,
                                           const Body& bi, const HostListRows& list, double* hist,
                                           const HostVec3& fh, const HostVec3& qh, int row0, int k0,
@@ -408,7 +409,8 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
     double rx, ry, rz, r2;
     const bool in = touching(hv, b, bi, j, rx, ry, rz, r2);
     t.k[n] = k, t.j[n] = j;
-    t.rx[n] = rx, t.ry[n] = ry, t.rz[n] = rz, t.r2[n] = r2;
+    t.rx[n] = rx, t.ry[n] = ry, t.rz[n] = rz;
+    if (R2) t.r2[n] = r2;
     far[apart] = k;
     n += in;
     apart += !in;
@@ -519,8 +521,8 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
     // The row's touching entries land in the batch's slots directly (the flush above left
     // room for the whole row).
     const int c0 = cb.n;
-    const SplitOut slots{cb.k + c0, cb.j + c0, cb.rx + c0, cb.ry + c0, cb.rz + c0, cb.r2 + c0};
-    cb.n += split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, kbeg, kend, slots);
+    const SplitOut slots{cb.k + c0, cb.j + c0, cb.rx + c0, cb.ry + c0, cb.rz + c0, nullptr};
+    cb.n += split_row<H, rot, false>(hv, b, bi, list, hist, fh, qh, row0, kbeg, kend, slots);
     for (int c = c0; c < cb.n; ++c) {
       const int r = row0 + cb.k[c];  // history row
       cb.k[c] = r;
@@ -544,11 +546,13 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
 // count. (A device has too few slabs to fill it; it keeps the two passes above.)
 // `batched`: laws with a batched evaluation (ContactBatchLaw) use it where the processor has
 // AVX; false forces the contact-by-contact rows (tests compare the two).
+// `started`: f and torque already hold the damping terms (set by the integrator's pass,
+// kick_drift with DampingStart), so the sweep that sets them is left out.
 template <class ExecSpace, class Model, class HistoryView>
 void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                              const HistoryView& history, const PeriodicBox& box, const Model& model,
                              const Damping& damping, const double strain_rate[3], double dt,
-                             bool batched = true) {
+                             bool batched = true, bool started = false) {
   const ParticleViews<ExecSpace> pv(p);
   const HostParticleViews hv(p);
   auto f = p.f, torque = p.torque;
@@ -560,16 +564,17 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
   const Model m = model;
   const double gb = damping.translational, gr = damping.rotational;
   const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
-  Kokkos::parallel_for(
-      "dem::compute_forces::damping", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-      KOKKOS_LAMBDA(const int i) {
-        // Plain ifs on compile-time constants (folded all the same): nvcc's extended
-        // lambdas cannot first-capture a variable inside if constexpr.
-        constexpr bool rot = Model::rotations;
-        for (int d = 0; d < 3; ++d) f(i, d) = -gb * pv.v(i, d);
-        if (rot)
-          for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
-      });
+  if (!started)
+    Kokkos::parallel_for(
+        "dem::compute_forces::damping", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+        KOKKOS_LAMBDA(const int i) {
+          // Plain ifs on compile-time constants (folded all the same): nvcc's extended
+          // lambdas cannot first-capture a variable inside if constexpr.
+          constexpr bool rot = Model::rotations;
+          for (int d = 0; d < 3; ++d) f(i, d) = -gb * pv.v(i, d);
+          if (rot)
+            for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
+        });
   const int slabs = nl.num_slabs();
   const int rounds = slabs >= 3 ? 3 : 1;
   using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
@@ -614,10 +619,11 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
                     double dt, bool two_pass = !forces_by_slabs<ExecSpace>(), bool batched = true,
-                    bool thread_per_particle = false) {
+                    bool thread_per_particle = false, bool started = false) {
   if (!two_pass) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
-      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, batched);
+      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, batched,
+                              started);
       return;
     }
   }

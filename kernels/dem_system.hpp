@@ -98,12 +98,13 @@ class DemSystem {
     if (profile_) return step_profiled(n);
     // The closing half kick of each step is deferred into the next step's first pass (same
     // arithmetic, one sweep less); the last one is applied before returning.
+    const DampingStart damp = damping_start();
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0);
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
-      if (rebuild_due(max_sq)) rebuild();
+      if (rebuild_due(max_sq)) rebuild();  // permutes f and torque with the particles
       walls_.update(time_ + dt);
-      forces(dt);
+      forces(dt, damp.on);
       time_ += dt;
       ++steps_;
     }
@@ -351,14 +352,25 @@ class DemSystem {
       return steps_ % params_.rebuild_every == params_.rebuild_every - 1;
     return nl_.needs_rebuild(max_sq, box_);
   }
-  void forces(double dt) {
+  // The one-pass host kernel's force sums start in the integrator's pass (one sweep over
+  // the particles fewer per step); the other force passes set the damping themselves.
+  DampingStart damping_start() const {
+    DampingStart d;
+    d.on = !two_pass();
+    d.translational = params_.damping.translational;
+    d.rotational = params_.damping.rotational;
+    return d;
+  }
+  // `started`: f and torque already hold the damping terms (kick_drift with damping_start()).
+  void forces(double dt, bool started = false) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
                   wall_history_, wall_record_, params_.gravity, external_);
       return;
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass(), params_.batched_contacts, params_.contact_thread_per_particle);
+                   two_pass(), params_.batched_contacts, params_.contact_thread_per_particle,
+                   started);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);
@@ -378,10 +390,11 @@ class DemSystem {
       acc += timer.seconds();
       timer.reset();
     };
+    const DampingStart damp = damping_start();
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt);
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp);
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);
@@ -391,7 +404,7 @@ class DemSystem {
       }
       lap(profile_->neighbor);
       walls_.update(time_ + dt);
-      forces(dt);
+      forces(dt, damp.on);
       lap(profile_->force);
       kick<kRot>(p_, dt);
       lap(profile_->integrate);

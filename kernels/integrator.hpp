@@ -13,13 +13,22 @@ namespace granular {
 // `pending`: the closing half kick of the previous step was deferred to this pass (one sweep
 // over the particles instead of two); it is applied first, with the same roundings as a
 // separate kick, so the trajectory is bitwise the same.
+// `damp`: the pass also starts the next force sum, f = -gamma_b v and torque = -gamma_br w
+// with the new velocities (what the force pass would otherwise set in a sweep of its own,
+// same arithmetic); the force pass is then told that the sums are started.
+struct DampingStart {
+  bool on = false;
+  double translational = 0.0, rotational = 0.0;
+};
 template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
-                  bool pending = false) {
+                  bool pending = false, DampingStart damp = DampingStart()) {
   auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
   auto mass = p.mass, inertia = p.inertia;
   const PeriodicBox b = box;
+  const bool start = damp.on;
+  const double gb = damp.translational, gr = damp.rotational;
   double max_sq = 0.0;
   Kokkos::parallel_reduce(
       "dem::VelocityVerlet::kick_drift", Kokkos::RangePolicy<ExecSpace>(0, p.n),
@@ -30,6 +39,7 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
           const double v0 = pending ? v(i, d) + h * f(i, d) : v(i, d);
           const double vd = v0 + h * f(i, d);
           v(i, d) = vd;
+          if (start) f(i, d) = -gb * vd;
           const double xd = b.wrap(x(i, d) + dt * vd, d);
           x(i, d) = xd;
           const double u = b.min_image(xd - x_ref(i, d), d);
@@ -39,7 +49,9 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
           const double hr = 0.5 * dt / inertia(i);
           for (int d = 0; d < 3; ++d) {
             const double w0 = pending ? w(i, d) + hr * q(i, d) : w(i, d);
-            w(i, d) = w0 + hr * q(i, d);
+            const double wd = w0 + hr * q(i, d);
+            w(i, d) = wd;
+            if (start) q(i, d) = -gr * wd;
           }
         }
         m = d2 > m ? d2 : m;

@@ -233,7 +233,7 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     LinearNormal::Params pn = model.normal.table(bi.s, bj.s);
     if (c == 8 || c == 9) pn.kn = 0.0, pn.gn = 0.0;  // zero normal force
     if (c == 10) pn.kn = -1e3;                       // a tensile normal force
-    cb.push(bi, bj, c, c, rx, ry, rz, r2, rate, pn, pt, h.data());
+    cb.push(bi, bj, c, c, rx, ry, rz, rate, pn, pt, h.data());
     // The scalar law with the same per-pair parameters.
     Friction one = model;
     one.normal.table.p[bi.s][bj.s] = pn;
