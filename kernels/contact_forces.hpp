@@ -385,6 +385,16 @@ struct RowSplit {
   KOKKOS_FORCEINLINE_FUNCTION SplitOut out() { return {k, j, rx, ry, rz, r2}; }
 };
 
+// PeriodicBox::min_image with the box's length and periodicity given (held in registers).
+KOKKOS_FORCEINLINE_FUNCTION double min_image_of(double dx, double l, bool periodic) {
+  if (!periodic) return dx;
+  if (dx > 0.5 * l)
+    dx -= l;
+  else if (dx < -0.5 * l)
+    dx += l;
+  return dx;
+}
+
 // Splits entries k0 .. k1 - 1 (at most SplitOut::kMax) and returns how many touch.
 template <int H, bool Rot, bool R2 = true>
 KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const PeriodicBox& b,
@@ -393,6 +403,12 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
                                           int k1, const SplitOut& t) {
   int far[SplitOut::kMax];
   int n = 0, apart = 0;
+  // The box and the owner in locals: the stores to the split's arrays could alias the
+  // box's fields as far as the compiler knows, which made it reload them for every entry.
+  // The test is touching()'s, operation for operation (same bits).
+  const double xi = bi.x[0], yi = bi.x[1], zi = bi.x[2], ai = bi.a;
+  const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
+  const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
   for (int k = k0; k < k1; ++k) {
     const int j = list.neighbors(k);
 #if !defined(__CUDA_ARCH__)
@@ -406,8 +422,12 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
       __builtin_prefetch(&qh(j, 0), 1);
     }
 #endif
-    double rx, ry, rz, r2;
-    const bool in = touching(hv, b, bi, j, rx, ry, rz, r2);
+    const double rx = min_image_of(xi - hv.x(j, 0), lx, px);
+    const double ry = min_image_of(yi - hv.x(j, 1), ly, py);
+    const double rz = min_image_of(zi - hv.x(j, 2), lz, pz);
+    const double sum = ai + hv.radius(j);
+    const double r2 = rx * rx + ry * ry + rz * rz;
+    const bool in = r2 < sum * sum;
     t.k[n] = k, t.j[n] = j;
     t.rx[n] = rx, t.ry[n] = ry, t.rz[n] = rz;
     if (R2) t.r2[n] = r2;
@@ -472,12 +492,13 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
 template <class Model>
 void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, const Model& m,
                            const HostListRows& list, const HostArray<const int>& order,
-                           double* hist, const HostVec3& fh, const HostVec3& qh, const double r3[3],
-                           double dt, int q_begin, int q_end) {
+                           double* hist, const HostVec3& fh, const HostVec3& qh,
+                           const double rate[3], double dt, int q_begin, int q_end) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
   static_assert(H == 3 && rot, "the batched law has a tangential spring");
   static_assert(ContactBatch::kCap <= SplitOut::kMax, "a batch-sized row must fit one split");
+  const double r3[3] = {rate[0], rate[1], rate[2]};  // a local copy: no reloads after stores
   ContactBatch cb;
   if (ContactBatchLaw<Model>::uniform(m))
     cb.set_uniform(m.normal.table(0, 0), m.tangential.table(0, 0));
