@@ -41,12 +41,13 @@ struct StageCheckpoints {
 // configurations); after each one the exact state and the outputs so far are checkpointed
 // without touching the system, so the trajectory does not depend on where the stages fall,
 // and a run resumed from any stage repeats the uninterrupted one bit for bit.
-// Returns false when `stop` asked to end the run at a checkpoint.
+// Returns false when `stop` asked to end the run at a checkpoint. `variant` indexes
+// s.variants: the preparation series are labelled with it (the jamming fit groups by it).
 template <class Model>
-bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& out,
-             Progress& progress, long& done, const StageCheckpoints& ck,
-             const std::function<bool()>& stop,
+bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, Progress& progress,
+             long& done, const StageCheckpoints& ck, const std::function<bool()>& stop,
              const std::function<void(const ConfigState&, double, double)>& on_config) {
+  const PrepVariant& v = s.variants.at(variant);
   GasSpec gas = s.gas;
   gas.count = v.count, gas.seed = v.seed;
   PeriodicBox box;
@@ -81,7 +82,7 @@ bool prepare(const Setup& s, const PrepVariant& v, const Model& model, Outputs& 
     out.prep["volumetric_strain_rate"].push_back(rate_now);
     out.prep["inertial_number"].push_back(
         m.pressure > 0 ? rate_now * dbar * std::sqrt(gas.density / m.pressure) : kNaN);
-    out.prep["variant"].push_back(static_cast<double>(&v - s.variants.data()));
+    out.prep["variant"].push_back(static_cast<double>(variant));
     out.prep["direction"].push_back(direction_now);
     out.prep["pressure_star"].push_back(m.pressure * dbar / kn_fixed);
     out.prep["ekin_over_epot"].push_back(m.epot > 0 ? m.ekin / m.epot : kNaN);

@@ -43,16 +43,6 @@ using namespace moduli_study;
 
 void check_elastic_moduli(const SceneFile& scene) { read_setup(scene); }
 
-namespace {
-// The preparation series of one variant's part carry that variant's index, set here where the
-// index is known (a part read back from a checkpoint is labelled as it is appended).
-void label_variant(Outputs& part, size_t unit) {
-  auto it = part.prep.find("variant");
-  if (it != part.prep.end())
-    for (double& x : it->second) x = static_cast<double>(unit);
-}
-}  // namespace
-
 void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup s = read_setup(scene);
   if (!begin_outputs(opts)) return;
@@ -118,10 +108,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       if (deal.done[unit]) {
         std::cerr << ensemble::prefix() << "variant " << (v.tag.empty() ? part_name : v.tag)
                   << ": taken from the checkpoint in " << parts << "\n";
-        if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) {
-          label_variant(part, unit);
-          out.append(part);
-        }
+        if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) out.append(part);
         progress.update(done += static_cast<long>(steps));
         continue;
       }
@@ -148,7 +135,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       std::vector<double> targets = s.targets;
       const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
       const Setup sv = for_variant(s, v);
-      const bool finished = prepare(sv, sv.variants[unit], prep, part, progress, done, ck, stop,
+      const bool finished = prepare(sv, unit, prep, part, progress, done, ck, stop,
                                     [&](const ConfigState& c, double ratio, double I) {
                                       // The target this configuration was saved at (the closest
                                       // listed value).
@@ -178,7 +165,6 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         stopped = true;
         return;
       }
-      label_variant(part, unit);
       save_moduli_part(parts, part_name, fingerprint, part);
       if (!spread) out.append(part);
     }
