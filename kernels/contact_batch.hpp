@@ -24,15 +24,10 @@
 #include <type_traits>
 
 #include "kernels/contact_model.hpp"
+#include "kernels/host_simd.hpp"
 
-#if defined(__GNUC__) && !defined(__CUDACC__) && !defined(__clang__) && defined(__x86_64__)
-#define GRANULAR_CONTACT_BATCH 1
-#define GRANULAR_AVX __attribute__((target("avx")))
-#define GRANULAR_AVX_INLINE __attribute__((target("avx"), always_inline)) inline
-#define GRANULAR_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#define GRANULAR_CONTACT_BATCH 0
-#endif
+// The batch exists where host AVX code is compiled.
+#define GRANULAR_CONTACT_BATCH GRANULAR_HOST_AVX
 
 namespace granular {
 
@@ -70,20 +65,6 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
     return true;
   }
 };
-
-// Whether this processor (and its operating system) runs AVX instructions (false where the
-// batch is not compiled).
-inline bool cpu_has_avx() {
-#if GRANULAR_CONTACT_BATCH
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx") != 0;
-  }();
-  return has;
-#else
-  return false;
-#endif
-}
 
 #if GRANULAR_CONTACT_BATCH
 

@@ -260,6 +260,9 @@ class DemSystem {
   const NeighborList<ExecSpace>& neighbor_list() const { return nl_; }
   const Model& model() const { return model_; }
   const DemParams& params() const { return params_; }
+  // The host kernel's contact batch on or off mid-run (the same bits either way): lets a
+  // benchmark alternate the two on one trajectory.
+  void set_batched_contacts(bool on) { params_.batched_contacts = on; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   void set_clock(double t, long steps) {

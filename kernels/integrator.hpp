@@ -3,6 +3,8 @@
 // the last neighbour build (fused so positions are read once per step).
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <type_traits>
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
@@ -20,10 +22,99 @@ struct DampingStart {
   bool on = false;
   double translational = 0.0, rotational = 0.0;
 };
+
+// The pass over particles i0 .. i1 - 1 for host backends, with raw pointers and the box in
+// locals: the Kokkos loop kept its running maximum in memory and reloaded the box's fields
+// after every store (the stores could alias them as far as the compiler knew). The same
+// operations in the same order as the loop of kick_drift below, so the same bits; returns
+// the block's largest squared displacement (NaNs skipped, as there).
+struct KickDriftRows {
+  double *x, *v, *f, *w, *q;
+  const double *mass, *inertia, *x_ref;
+  PeriodicBox box;
+  double dt;
+  bool pending;
+  DampingStart damp;
+
+  template <bool Rotations>
+  double run(int i0, int i1) const {
+    double* const xs = x;
+    double* const vs = v;
+    double* const fs = f;
+    double* const ws = w;
+    double* const qs = q;
+    const double* const ms = mass;
+    const double* const is = inertia;
+    const double* const xr = x_ref;
+    const double step = dt;
+    const bool pend = pending, start = damp.on;
+    const double gb = damp.translational, gr = damp.rotational;
+    double lo[3], len[3];
+    bool per[3];
+    for (int d = 0; d < 3; ++d) lo[d] = box.lo[d], len[d] = box.len[d], per[d] = box.periodic[d];
+    double m = Kokkos::reduction_identity<double>::max();
+    for (int i = i0; i < i1; ++i) {
+      const double h = 0.5 * step / ms[i];
+      double d2 = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        const double fd = fs[3 * i + d];
+        const double v0 = pend ? vs[3 * i + d] + h * fd : vs[3 * i + d];
+        const double vd = v0 + h * fd;
+        vs[3 * i + d] = vd;
+        if (start) fs[3 * i + d] = -gb * vd;
+        double xd = xs[3 * i + d] + step * vd;
+        if (per[d]) {  // PeriodicBox::wrap
+          if (xd >= lo[d] + len[d])
+            xd -= len[d];
+          else if (xd < lo[d])
+            xd += len[d];
+        }
+        xs[3 * i + d] = xd;
+        double u = xd - xr[3 * i + d];
+        if (per[d]) {  // PeriodicBox::min_image
+          if (u > 0.5 * len[d])
+            u -= len[d];
+          else if (u < -0.5 * len[d])
+            u += len[d];
+        }
+        d2 += u * u;
+      }
+      if (Rotations) {
+        const double hr = 0.5 * step / is[i];
+        for (int d = 0; d < 3; ++d) {
+          const double qd = qs[3 * i + d];
+          const double w0 = pend ? ws[3 * i + d] + hr * qd : ws[3 * i + d];
+          const double wd = w0 + hr * qd;
+          ws[3 * i + d] = wd;
+          if (start) qs[3 * i + d] = -gr * wd;
+        }
+      }
+      m = d2 > m ? d2 : m;
+    }
+    return m;
+  }
+};
+
 template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
                   bool pending = false, DampingStart damp = DampingStart()) {
+  if constexpr (std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>) {
+    const KickDriftRows rows{
+        p.x.data(),       p.v.data(),   p.f.data(), p.w.data(), p.torque.data(), p.mass.data(),
+        p.inertia.data(), x_ref.data(), box,        dt,         pending,         damp};
+    constexpr int kBlock = 512;  // particles per task
+    const int n = p.n, blocks = (n + kBlock - 1) / kBlock;
+    double max_sq = 0.0;
+    Kokkos::parallel_reduce(
+        "dem::VelocityVerlet::kick_drift_rows", Kokkos::RangePolicy<ExecSpace>(0, blocks),
+        [=](const int bk, double& m) {
+          const double mb = rows.run<Rotations>(bk * kBlock, std::min(n, (bk + 1) * kBlock));
+          m = mb > m ? mb : m;
+        },
+        Kokkos::Max<double>(max_sq));
+    return max_sq;
+  }
   auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
   auto mass = p.mass, inertia = p.inertia;
   const PeriodicBox b = box;

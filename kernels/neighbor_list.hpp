@@ -23,6 +23,7 @@
 #include "core/error.hpp"
 #include "core/particles.hpp"
 #include "kernels/force_slabs.hpp"
+#include "kernels/neighbor_sweep.hpp"
 #include "kernels/view_io.hpp"
 
 namespace granular {
@@ -61,6 +62,32 @@ struct CellVisitor {
   // without a branch per candidate.
   template <class F>
   KOKKOS_INLINE_FUNCTION void candidates(const int i, F&& on_candidate) const {
+    runs(i, Candidates<F>{*this, i, x(i, 0), x(i, 1), x(i, 2), radius(i), on_candidate});
+  }
+  // The candidates of the slots [s0, s1) of the cell order (a functor for nvcc, as above).
+  template <class F>
+  struct Candidates {
+    const CellVisitor& v;
+    int i;
+    double xi, yi, zi, ai;
+    F& on_candidate;
+    KOKKOS_INLINE_FUNCTION void operator()(int s0, int s1) const {
+      for (int s = s0; s < s1; ++s) {
+        const int j = v.cell_particles(s);
+        if (j == i) continue;
+        const double rx = v.box.min_image(xi - v.x(j, 0), 0);
+        const double ry = v.box.min_image(yi - v.x(j, 1), 1);
+        const double rz = v.box.min_image(zi - v.x(j, 2), 2);
+        const double cut = ai + v.radius(j) + v.skin;
+        on_candidate(j, rx * rx + ry * ry + rz * rz < cut * cut);
+      }
+    }
+  };
+  // Calls on_run(s0, s1) for each run of consecutive slots [s0, s1) of the cell order that
+  // i's stencil sweeps, in the sweep's order (i's own slot among them). The candidates are
+  // cell_particles(s) for s in the runs.
+  template <class F>
+  KOKKOS_INLINE_FUNCTION void runs(const int i, F&& on_run) const {
     const int c = cell_of(i);
     const int cx = c % ncx, cy = (c / ncx) % ncy, cz = c / (ncx * ncy);
     // Offsets {-1,0,1} per axis, or fewer when the axis has < 3 cells, so that no cell is
@@ -73,35 +100,21 @@ struct CellVisitor {
     const int hiy = py ? (ncy >= 2 ? 1 : 0) : (cy < ncy - 1 ? 1 : 0);
     const int loz = pz ? (ncz >= 3 ? -1 : 0) : (cz > 0 ? -1 : 0);
     const int hiz = pz ? (ncz >= 2 ? 1 : 0) : (cz < ncz - 1 ? 1 : 0);
-    const double xi = x(i, 0), yi = x(i, 1), zi = x(i, 2), ai = radius(i);
     // Cells of the stencil beyond the largest cutoff of i are skipped: the squared distance
     // from i to a neighbour cell is the sum over axes of its distance to that cell's near
     // face (zero along an axis where the cells coincide). A small particle's cutoff is well
     // inside the stencil, whose cells are sized for the largest pair. Not where an axis has
     // fewer than 3 cells (a wrapped neighbour cell lies on both sides of i there).
     double gx[3], gy[3], gz[3];
-    face_gaps(xi, cx, ncx, 0, px, gx);
-    face_gaps(yi, cy, ncy, 1, py, gy);
-    face_gaps(zi, cz, ncz, 2, pz, gz);
-    const double reach = ai + a_max + skin;
+    face_gaps(x(i, 0), cx, ncx, 0, px, gx);
+    face_gaps(x(i, 1), cy, ncy, 1, py, gy);
+    face_gaps(x(i, 2), cz, ncz, 2, pz, gz);
+    const double reach = radius(i) + a_max + skin;
     const double reach_sq = reach * reach * (1.0 + 1e-9);  // margin for the round-off of gaps
-    // The particles of cells [first, last) of the cell order.
-    const auto visit_cells = [&](int first, int last) {
-      const int s1 = cell_start(last);
-      for (int s = cell_start(first); s < s1; ++s) {
-        const int j = cell_particles(s);
-        if (j == i) continue;
-        const double rx = box.min_image(xi - x(j, 0), 0);
-        const double ry = box.min_image(yi - x(j, 1), 1);
-        const double rz = box.min_image(zi - x(j, 2), 2);
-        const double cut = ai + radius(j) + skin;
-        on_candidate(j, rx * rx + ry * ry + rz * rz < cut * cut);
-      }
-    };
     for (int dz = loz; dz <= hiz; ++dz) {
-      const int zz = (cz + dz + ncz) % ncz;
+      const int zz = wrap_cell(cz + dz, ncz);
       for (int dy = loy; dy <= hiy; ++dy) {
-        const int yy = (cy + dy + ncy) % ncy;
+        const int yy = wrap_cell(cy + dy, ncy);
         const double gzy = gz[dz + 1] + gy[dy + 1];
         if (gzy > reach_sq) continue;
         // The row's cells within reach are consecutive along x, and so in the cell order
@@ -111,17 +124,23 @@ struct CellVisitor {
         const int dlo = gzy + gx[0] > reach_sq ? 0 : lox, dhi = gzy + gx[2] > reach_sq ? 0 : hix;
         int first = -1, last = -1;
         for (int dx = dlo; dx <= dhi; ++dx) {
-          const int cc = cell_rank((zz * ncy + yy) * ncx + (cx + dx + ncx) % ncx);
+          const int cc = cell_rank((zz * ncy + yy) * ncx + wrap_cell(cx + dx, ncx));
           if (cc == last) {
             ++last;
             continue;
           }
-          if (first >= 0) visit_cells(first, last);
+          if (first >= 0) on_run(cell_start(first), cell_start(last));
           first = cc, last = cc + 1;
         }
-        if (first >= 0) visit_cells(first, last);
+        if (first >= 0) on_run(cell_start(first), cell_start(last));
       }
     }
+  }
+
+  // Cell index c (one outside the grid at most) brought back into 0 .. nc - 1: a compare
+  // where the modulo's division cost ~40 integer divisions per particle and build.
+  KOKKOS_INLINE_FUNCTION static int wrap_cell(int c, int nc) {
+    return c < 0 ? c + nc : (c >= nc ? c - nc : c);
   }
 
   // Squared distances along axis d from coordinate xd (in cell c of nc) to the cells below,
@@ -491,31 +510,47 @@ void NeighborList<ExecSpace>::build(const Particles<ExecSpace>& p, const Periodi
   // partner). A device keeps its branch: a store per candidate would cost it memory traffic.
   constexpr bool branch_free = std::is_same<mem, Kokkos::HostSpace>::value;
   const int cap = scratch_cap_;
-  const size_t stride = cap + (branch_free ? 1 : 0);
+  // Host rows have four slots more: the AVX sweep stores four entries at a time.
+  const size_t stride = cap + (branch_free ? 4 : 0);
   int_view scratch(Kokkos::view_alloc("neighbor::scratch", Kokkos::WithoutInitializing),
                    static_cast<size_t>(n) * stride);
-  Kokkos::parallel_for(
-      "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
-      KOKKOS_LAMBDA(const int i) {
-        const int id_i = id(i);
-        int count = 0, owned = 0;
-        const size_t row = static_cast<size_t>(i) * stride;
-        if (branch_free) {
-          visit.candidates(i, [&](int j, bool in) {
-            scratch(row + (count < cap ? count : cap)) = j;
-            owned += in & (id(j) > id_i);
-            count += in;
-          });
-        } else {
-          visit(i, [&](int j) {
-            if (count < cap) scratch(row + count) = j;
-            ++count;
-            owned += id(j) > id_i ? 1 : 0;
-          });
-        }
-        offsets(i) = count;
-        owned_end(i) = owned;
-      });
+#if GRANULAR_HOST_AVX
+  // Particles in cell order (slot s holds particle s): the candidates of a run of cells are
+  // consecutive, and the sweep tests four at a time (kernels/neighbor_sweep.hpp).
+  if (branch_free && in_cell_order && cpu_has_avx()) {
+    const ContiguousSweep sweep{x.data(), radius.data(), id.data(), n, b, skin_};
+    int* const rows = scratch.data();
+    Kokkos::parallel_for("neighbor::NeighborList::count_avx", Kokkos::RangePolicy<ExecSpace>(0, n),
+                         [=](const int i) {
+                           const ContiguousSweep::Tally t =
+                               sweep(visit, i, rows + static_cast<size_t>(i) * stride, cap);
+                           offsets(i) = t.count;
+                           owned_end(i) = t.owned;
+                         });
+  } else
+#endif
+    Kokkos::parallel_for(
+        "neighbor::NeighborList::count", Kokkos::RangePolicy<ExecSpace>(0, n),
+        KOKKOS_LAMBDA(const int i) {
+          const int id_i = id(i);
+          int count = 0, owned = 0;
+          const size_t row = static_cast<size_t>(i) * stride;
+          if (branch_free) {
+            visit.candidates(i, [&](int j, bool in) {
+              scratch(row + (count < cap ? count : cap)) = j;
+              owned += in & (id(j) > id_i);
+              count += in;
+            });
+          } else {
+            visit(i, [&](int j) {
+              if (count < cap) scratch(row + count) = j;
+              ++count;
+              owned += id(j) > id_i ? 1 : 0;
+            });
+          }
+          offsets(i) = count;
+          owned_end(i) = owned;
+        });
   int total = 0;
   Kokkos::parallel_scan(
       "neighbor::NeighborList::scan", Kokkos::RangePolicy<ExecSpace>(0, n + 1),

@@ -5,9 +5,14 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--thread-per-particle] [--slabs S] [--block-rows R]
+//                        [--alternate batch [--block B]] [--thread-per-particle] [--slabs S]
+//                        [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
+// --alternate batch [--block B]: after the timed run, steps the same trajectory in blocks of B
+// steps (default 100) with the batch switched on and off in turn and reports the ratio of the
+// two rates (median over the pairs of blocks): an A/B comparison whose two sides share the
+// machine's slow phases, for changes smaller than the spread between runs.
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -98,6 +103,8 @@ int main(int argc, char** argv) {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
     bool triad = true, batched = true, per_particle = false;
+    std::string alternate;
+    long block = 100;
     int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
@@ -126,6 +133,10 @@ int main(int argc, char** argv) {
         triad = false;
       else if (a == "--no-batch")
         batched = false;
+      else if (a == "--alternate")
+        alternate = next();
+      else if (a == "--block")
+        block = std::stol(next());
       else if (a == "--thread-per-particle")
         per_particle = true;
       else if (a == "--slabs")
@@ -136,6 +147,14 @@ int main(int argc, char** argv) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
       }
+    }
+    if (!alternate.empty() && alternate != "batch") {
+      std::cerr << "--alternate takes batch, not " << alternate << "\n";
+      return 2;
+    }
+    if (block < 1) {
+      std::cerr << "--block must be at least 1\n";
+      return 2;
     }
     const int threads = Exec::concurrency();
     if (out.empty()) out = "perf/results/dem_throughput_" + std::to_string(threads) + "t.json";
@@ -185,7 +204,7 @@ int main(int argc, char** argv) {
             source = "generated (seed 12345)";
           }
           const int n = host.size();
-          std::vector<double> rates;
+          std::vector<double> rates, alternated;
           StepProfile prof;
           double z_initial = 0, ekin_initial = 0, z_start = 0, z_end = 0, phi = 0, ekin_start = 0,
                  ekin_end = 0, erot_start = 0, erot_end = 0;
@@ -221,6 +240,29 @@ int main(int argc, char** argv) {
             builds = sys.neighbor_list().builds() - builds0;
             entries = sys.neighbor_list().num_entries();
             slabs_used = sys.neighbor_list().num_slabs();
+            if (!alternate.empty()) {  // switched on (A) and off (B) in turn, same trajectory
+              std::vector<double> ratio;
+              double t_on = 0, t_off = 0;
+              for (long s = 0; s + 2 * block <= steps; s += 2 * block) {
+                double sec[2];
+                for (int side = 0; side < 2; ++side) {
+                  const bool on = side == 0;
+                  sys.set_batched_contacts(on);
+                  Kokkos::fence();
+                  Kokkos::Timer tb;
+                  sys.step(block);
+                  Kokkos::fence();
+                  sec[side] = tb.seconds();
+                }
+                t_on += sec[0], t_off += sec[1];
+                ratio.push_back(sec[1] / sec[0]);
+              }
+              sys.set_batched_contacts(batched);
+              std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
+                        << " on/off rate ratio, median of " << ratio.size() << " block pairs "
+                        << median(ratio) << ", of the sums " << t_off / t_on << "\n";
+              alternated.push_back(median(ratio));
+            }
             if (r == 0) {  // one extra profiled window, not part of the timed figures
               sys.set_profile(&prof);
               sys.step(std::min(steps, 500L));
@@ -288,6 +330,11 @@ int main(int argc, char** argv) {
           if (forces_by_slabs<Exec>()) row["force_slabs"] = slabs_used;
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;
+          if (!alternated.empty()) {
+            row["alternated"] = alternate;
+            row["alternated_block_steps"] = block;
+            row["alternated_on_off_rate_ratio_per_rep"] = alternated;
+          }
           row["bytes_per_particle_step"] = bytes;
           row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
           if (triad) row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;

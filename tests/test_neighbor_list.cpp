@@ -326,6 +326,59 @@ TYPED_TEST(NeighborListTest, CrowdedParticleBeyondTheRowCapacityIsListedExactly)
   }
 }
 
+// With the particles stored in cell order (DemSystem's sorting), host builds test four
+// candidates at a time (kernels/neighbor_sweep.hpp). The list must be the scalar sweep's,
+// entry for entry (the force sums follow its order), and the brute-force set: in a periodic
+// and a walled box, with a particle count that leaves a partial vector at the array's end, and
+// with a crowded particle whose row outgrows the build's scratch.
+TYPED_TEST(NeighborListTest, VectorSweepInCellOrderListsTheScalarSweepsEntriesInItsOrder) {
+  using Exec = TypeParam;
+  const auto hs = Kokkos::HostSpace();
+  for (const bool periodic_z : {true, false})
+    for (const bool crowded : {false, true}) {
+      PeriodicBox box;
+      auto p = gas<Exec>(box, 1499, 0.3);
+      box.periodic[2] = periodic_z;
+      if (crowded) {  // one particle grown to reach ~120 others
+        auto r = Kokkos::create_mirror_view_and_copy(hs, p.radius);
+        r(700) = 6.0;
+        Kokkos::deep_copy(p.radius, r);
+      }
+      const double skin = 0.3;
+      NeighborList<Exec> fast(skin), plain(skin);
+      fast.keep_pair_index(true);
+      fast.bin(p, box);
+      typename Particles<Exec>::int_view order("order", p.n);
+      Kokkos::deep_copy(order, Kokkos::subview(fast.cell_order(), std::make_pair(0, p.n)));
+      p.permute(order);
+      const std::string where = std::string(periodic_z ? "periodic" : "walled") + " z" +
+                                (crowded ? ", a crowded particle" : "");
+      for (int build = 0; build < 2; ++build) {  // the second with the scratch grown
+        fast.build(p, box, true);                // relabelled cells: the four-at-a-time sweep
+        plain.build(p, box);                     // binned again: the same cells, the scalar sweep
+        auto off_f = Kokkos::create_mirror_view_and_copy(hs, fast.offsets());
+        auto off_p = Kokkos::create_mirror_view_and_copy(hs, plain.offsets());
+        auto own_f = Kokkos::create_mirror_view_and_copy(hs, fast.owned_end());
+        auto own_p = Kokkos::create_mirror_view_and_copy(hs, plain.owned_end());
+        auto nb_f = Kokkos::create_mirror_view_and_copy(hs, fast.neighbors());
+        auto nb_p = Kokkos::create_mirror_view_and_copy(hs, plain.neighbors());
+        ASSERT_EQ(fast.num_entries(), plain.num_entries()) << where;
+        for (int i = 0; i <= p.n; ++i) ASSERT_EQ(off_f(i), off_p(i)) << where << ", row " << i;
+        for (int i = 0; i < p.n; ++i) ASSERT_EQ(own_f(i), own_p(i)) << where << ", row " << i;
+        for (int k = 0; k < fast.num_entries(); ++k)
+          ASSERT_EQ(nb_f(k), nb_p(k)) << where << ", entry " << k;
+        const auto ref = brute_force(p, box, skin);
+        EXPECT_EQ(listed(fast, p.n), ref) << where;
+        check_owned_first_and_mirror(fast, p);
+        size_t most = 0;
+        for (const auto& s : ref) most = std::max(most, s.size());
+        if (crowded) {
+          EXPECT_GT(most, 64u) << where << ": the crowded row must outgrow the scratch";
+        }
+      }
+    }
+}
+
 #include "kernels/strain_modes.hpp"
 
 TEST(StrainModes, PureShearConservesVolumeAndTrueStrainsAdd) {

@@ -1,0 +1,32 @@
+// Host-side vector code for x86-64 GNU builds: the target attributes that compile single
+// functions for AVX while the rest of the build stays portable, and the run-time check that
+// decides whether those functions may run. Users: the contact batch (kernels/contact_batch.hpp)
+// and the neighbour build's candidate sweep (kernels/neighbor_sweep.hpp).
+#pragma once
+
+#if defined(__GNUC__) && !defined(__CUDACC__) && !defined(__clang__) && defined(__x86_64__)
+#define GRANULAR_HOST_AVX 1
+#define GRANULAR_AVX __attribute__((target("avx")))
+#define GRANULAR_AVX_INLINE __attribute__((target("avx"), always_inline)) inline
+#define GRANULAR_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define GRANULAR_HOST_AVX 0
+#endif
+
+namespace granular {
+
+// Whether this processor (and its operating system) runs AVX instructions (false where no
+// AVX code is compiled).
+inline bool cpu_has_avx() {
+#if GRANULAR_HOST_AVX
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx") != 0;
+  }();
+  return has;
+#else
+  return false;
+#endif
+}
+
+}  // namespace granular
