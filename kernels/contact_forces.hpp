@@ -3,6 +3,7 @@
 // hook through which multi-contact laws act (kernels/multicontact.hpp; none by default).
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <stdexcept>
 #include <type_traits>
 
 #include "core/box.hpp"
@@ -395,12 +396,40 @@ KOKKOS_FORCEINLINE_FUNCTION double min_image_of(double dx, double l, bool period
   return dx;
 }
 
-// Splits entries k0 .. k1 - 1 (at most SplitOut::kMax) and returns how many touch.
-template <int H, bool Rot, bool R2 = true>
+// The near list of the host kernel: each particle's owned entries within a second, smaller
+// skin of touching, in list order (a subsequence of its row). While no particle has moved
+// half that skin since it was recorded, every other entry of the row is apart and stays
+// apart, its history already forgotten: the force pass reads only the near entries, and the
+// touching contacts, their order and so every sum are the same as from the whole row.
+// Recorded by any force pass over the whole rows (ListEntries), read by the next ones
+// (NearEntries); DemSystem decides which (near_skin in DemParams).
+struct NearRows {
+  int* k = nullptr;      // near entries (list indices), particle i's from pair_begin(i) on
+  int* count = nullptr;  // near entries per particle
+  double skin = 0.0;     // the near skin the rows are recorded with
+};
+// The entries a row split reads. ListEntries: the row's own entries e = k, recording those
+// within the near skin into `near` (i's near row; the next slot is `kept`: a slot never
+// beyond the entry being read, so every store stays inside i's row).
+struct ListEntries {
+  int* near;
+  double skin;
+  static constexpr bool record = true;
+  KOKKOS_FORCEINLINE_FUNCTION int k(int e) const { return e; }
+};
+// NearEntries: the near entries e of i's near row, read from the near list.
+struct NearEntries {
+  const int* near;
+  static constexpr bool record = false;
+  KOKKOS_FORCEINLINE_FUNCTION int k(int e) const { return near[e]; }
+};
+
+// Splits entries e0 .. e1 - 1 (at most SplitOut::kMax) of `src` and returns how many touch.
+template <int H, bool Rot, bool R2 = true, class Src = ListEntries>
 KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const PeriodicBox& b,
                                           const Body& bi, const HostListRows& list, double* hist,
-                                          const HostVec3& fh, const HostVec3& qh, int row0, int k0,
-                                          int k1, const SplitOut& t) {
+                                          const HostVec3& fh, const HostVec3& qh, int row0, int e0,
+                                          int e1, const SplitOut& t, const Src& src, int& kept) {
   int far[SplitOut::kMax];
   int n = 0, apart = 0;
   // The box and the owner in locals: the stores to the split's arrays could alias the
@@ -409,7 +438,10 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
   const double xi = bi.x[0], yi = bi.x[1], zi = bi.x[2], ai = bi.a;
   const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
   const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
-  for (int k = k0; k < k1; ++k) {
+  double near_reach = 0.0;
+  if constexpr (Src::record) near_reach = ai + src.skin;
+  for (int e = e0; e < e1; ++e) {
+    const int k = src.k(e);
     const int j = list.neighbors(k);
 #if !defined(__CUDA_ARCH__)
     // The touching partners' velocities (and spins) are read and their forces (and torques)
@@ -425,7 +457,8 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
     const double rx = min_image_of(xi - hv.x(j, 0), lx, px);
     const double ry = min_image_of(yi - hv.x(j, 1), ly, py);
     const double rz = min_image_of(zi - hv.x(j, 2), lz, pz);
-    const double sum = ai + hv.radius(j);
+    const double aj = hv.radius(j);
+    const double sum = ai + aj;
     const double r2 = rx * rx + ry * ry + rz * rz;
     const bool in = r2 < sum * sum;
     t.k[n] = k, t.j[n] = j;
@@ -434,30 +467,57 @@ KOKKOS_FORCEINLINE_FUNCTION int split_row(const HostParticleViews& hv, const Per
     far[apart] = k;
     n += in;
     apart += !in;
+    if constexpr (Src::record) {
+      const double reach = near_reach + aj;
+      src.near[kept] = k;
+      kept += r2 < reach * reach;
+    }
   }
   for (int a = 0; a < apart; ++a) forget_history<H>(hist, row0 + far[a]);
   return n;
 }
 
+// The entries of owner row i to read: the list's (recording the near ones, Record) or the
+// near list's (Use).
+enum class NearMode { Record, Use };
+struct RowEntries {
+  int e0, e1;  // entries e0 .. e1 - 1 of the source
+  int row0;    // history row of list entry k: row0 + k
+};
+template <NearMode Mode>
+KOKKOS_FORCEINLINE_FUNCTION RowEntries row_entries(const HostListRows& list, const NearRows& nr,
+                                                   int i) {
+  const int kbeg = list.offsets(i), pb = list.pair_begin(i);
+  if (Mode == NearMode::Use) return {pb, pb + nr.count[i], pb - kbeg};
+  return {kbeg, list.owned_end(i), pb - kbeg};
+}
+
 // One owner row of the one-pass kernel below: particle i evaluates the contacts it owns,
 // adds their forces to itself and scatters the reactions to its partners.
 // `hist` holds the owners' rows (NeighborList::pair_begin).
-template <class Model>
+template <class Model, NearMode Mode>
 KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const PeriodicBox& b,
                                               const Model& m, const HostListRows& list,
                                               double* hist, const HostVec3& fh, const HostVec3& qh,
-                                              const double r3[3], double dt, int i) {
+                                              const double r3[3], double dt, const NearRows& nr,
+                                              int i) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
   const Body bi = load_body(hv, i, rot);
   double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
-  const int kbeg = list.offsets(i), kend = list.owned_end(i);
-  const int row0 = H > 0 ? list.pair_begin(i) - kbeg : 0;  // history row of entry k
-  for (int k0 = kbeg; k0 < kend; k0 += RowSplit::kChunk) {
+  const RowEntries re = row_entries<Mode>(list, nr, i);
+  const int row0 = H > 0 ? re.row0 : 0;  // history row of entry k
+  int kept = 0;
+  for (int e0 = re.e0; e0 < re.e1; e0 += RowSplit::kChunk) {
     RowSplit t;
-    const int touching =
-        split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, k0,
-                          k0 + RowSplit::kChunk < kend ? k0 + RowSplit::kChunk : kend, t.out());
+    const int e1 = e0 + RowSplit::kChunk < re.e1 ? e0 + RowSplit::kChunk : re.e1;
+    int touching;
+    if constexpr (Mode == NearMode::Use)
+      touching = split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, e0, e1, t.out(),
+                                   NearEntries{nr.k}, kept);
+    else
+      touching = split_row<H, rot>(hv, b, bi, list, hist, fh, qh, row0, e0, e1, t.out(),
+                                   ListEntries{nr.k + list.pair_begin(i), nr.skin}, kept);
     for (int c = 0; c < touching; ++c) {
       const int k = t.k[c], j = t.j[c];
       PairState s;
@@ -480,6 +540,7 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
         }
     }
   }
+  if (Mode == NearMode::Record) nr.count[i] = kept;
   for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
   if (rot)
     for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
@@ -489,11 +550,12 @@ KOKKOS_FORCEINLINE_FUNCTION void one_pass_row(const HostParticleViews& hv, const
 // The same rows with the contacts evaluated in batches (kernels/contact_batch.hpp): gather
 // the touching contacts of whole rows, evaluate them four at a time (AVX), scatter row by
 // row in list order. Bitwise the results of one_pass_row.
-template <class Model>
+template <class Model, NearMode Mode>
 void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, const Model& m,
                            const HostListRows& list, const HostArray<const int>& order,
                            double* hist, const HostVec3& fh, const HostVec3& qh,
-                           const double rate[3], double dt, int q_begin, int q_end) {
+                           const double rate[3], double dt, const NearRows& nr, int q_begin,
+                           int q_end) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
   static_assert(H == 3 && rot, "the batched law has a tangential spring");
@@ -531,19 +593,28 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
   };
   for (int q = q_begin; q < q_end; ++q) {
     const int i = order(q);
-    const int kbeg = list.offsets(i), kend = list.owned_end(i);
-    if (cb.rows == ContactBatch::kCap || cb.n + (kend - kbeg) > ContactBatch::kCap) flush();
-    if (kend - kbeg > ContactBatch::kCap) {  // a crowded row: evaluated on its own
-      one_pass_row(hv, b, m, list, hist, fh, qh, r3, dt, i);
+    const RowEntries re = row_entries<Mode>(list, nr, i);
+    const int len = re.e1 - re.e0;
+    if (cb.rows == ContactBatch::kCap || cb.n + len > ContactBatch::kCap) flush();
+    if (len > ContactBatch::kCap) {  // a crowded row: evaluated on its own
+      one_pass_row<Model, Mode>(hv, b, m, list, hist, fh, qh, r3, dt, nr, i);
       continue;
     }
     const Body bi = load_body(hv, i, rot);
-    const int row0 = list.pair_begin(i) - kbeg;  // history row of entry k
+    const int row0 = re.row0;  // history row of entry k
     // The row's touching entries land in the batch's slots directly (the flush above left
     // room for the whole row).
     const int c0 = cb.n;
     const SplitOut slots{cb.k + c0, cb.j + c0, cb.rx + c0, cb.ry + c0, cb.rz + c0, nullptr};
-    cb.n += split_row<H, rot, false>(hv, b, bi, list, hist, fh, qh, row0, kbeg, kend, slots);
+    int kept = 0;
+    if constexpr (Mode == NearMode::Use) {
+      cb.n += split_row<H, rot, false>(hv, b, bi, list, hist, fh, qh, row0, re.e0, re.e1, slots,
+                                       NearEntries{nr.k}, kept);
+    } else {
+      cb.n += split_row<H, rot, false>(hv, b, bi, list, hist, fh, qh, row0, re.e0, re.e1, slots,
+                                       ListEntries{nr.k + list.pair_begin(i), nr.skin}, kept);
+      nr.count[i] = kept;
+    }
     for (int c = c0; c < cb.n; ++c) {
       const int r = row0 + cb.k[c];  // history row
       cb.k[c] = r;
@@ -557,6 +628,46 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
 }
 #endif
 
+// The slabs of the one-pass kernel below, in three rounds (see there), reading the rows as
+// Mode says.
+template <class ExecSpace, class Model, NearMode Mode>
+void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Model& m,
+                    const HostListRows& list, const HostArray<const int>& order,
+                    const HostArray<const int>& slab_begin, double* hist, const HostVec3& fh,
+                    const HostVec3& qh, const double rate[3], double dt, const NearRows& nr,
+                    int slabs, bool batched) {
+  const int rounds = slabs >= 3 ? 3 : 1;
+  using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
+  const double rt[3] = {rate[0], rate[1], rate[2]};
+#if GRANULAR_CONTACT_BATCH
+  if constexpr (ContactBatchLaw<Model>::available) {
+    if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(m)) {
+      for (int r = 0; r < rounds; ++r) {
+        const int tasks = (slabs - r + rounds - 1) / rounds;
+        Kokkos::parallel_for("dem::compute_forces::slabs", Policy(0, tasks), [=](const int t) {
+          const int slab = t * rounds + r;
+          one_pass_rows_batched<Model, Mode>(hv, b, m, list, order, hist, fh, qh, rt, dt, nr,
+                                             slab_begin(slab), slab_begin(slab + 1));
+        });
+      }
+      return;
+    }
+  }
+#else
+  (void)batched;
+#endif
+  for (int r = 0; r < rounds; ++r) {
+    const int tasks = (slabs - r + rounds - 1) / rounds;
+    Kokkos::parallel_for(
+        "dem::compute_forces::slabs", Policy(0, tasks), KOKKOS_LAMBDA(const int t) {
+          const int slab = t * rounds + r;
+          const double r3[3] = {rt[0], rt[1], rt[2]};
+          for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q)
+            one_pass_row<Model, Mode>(hv, b, m, list, hist, fh, qh, r3, dt, nr, order(q));
+        });
+  }
+}
+
 // One pass, for host backends: the owner of each contact evaluates it, adds the force to
 // itself and scatters the reaction to its partner at once, as a serial code with a half
 // list would. No per-contact force array, no second sweep over the list. Writes to the
@@ -569,11 +680,16 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
 // AVX; false forces the contact-by-contact rows (tests compare the two).
 // `started`: f and torque already hold the damping terms (set by the integrator's pass,
 // kick_drift with DampingStart), so the sweep that sets them is left out.
+// `near`, `near_mode`: the near list's rows (see NearRows), recorded by this pass or read by
+// it; the caller keeps track of whether they are still valid.
 template <class ExecSpace, class Model, class HistoryView>
 void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                              const HistoryView& history, const PeriodicBox& box, const Model& model,
                              const Damping& damping, const double strain_rate[3], double dt,
-                             bool batched = true, bool started = false) {
+                             const NearRows& near, NearMode near_mode, bool batched = true,
+                             bool started = false) {
+  if (p.n > 0 && (near.k == nullptr || near.count == nullptr))
+    throw std::logic_error("compute_forces_by_slabs: no room for the near list's rows");
   const ParticleViews<ExecSpace> pv(p);
   const HostParticleViews hv(p);
   auto f = p.f, torque = p.torque;
@@ -597,35 +713,12 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
             for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
         });
   const int slabs = nl.num_slabs();
-  const int rounds = slabs >= 3 ? 3 : 1;
-  using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
-#if GRANULAR_CONTACT_BATCH
-  if constexpr (ContactBatchLaw<Model>::available) {
-    if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(model)) {
-      for (int r = 0; r < rounds; ++r) {
-        const int tasks = (slabs - r + rounds - 1) / rounds;
-        Kokkos::parallel_for("dem::compute_forces::slabs", Policy(0, tasks), [=](const int t) {
-          const int slab = t * rounds + r;
-          one_pass_rows_batched(hv, b, m, list, order, hist, fh, qh, rate, dt, slab_begin(slab),
-                                slab_begin(slab + 1));
-        });
-      }
-      return;
-    }
-  }
-#else
-  (void)batched;
-#endif
-  for (int r = 0; r < rounds; ++r) {
-    const int tasks = (slabs - r + rounds - 1) / rounds;
-    Kokkos::parallel_for(
-        "dem::compute_forces::slabs", Policy(0, tasks), KOKKOS_LAMBDA(const int t) {
-          const int slab = t * rounds + r;
-          const double r3[3] = {rate[0], rate[1], rate[2]};
-          for (int q = slab_begin(slab); q < slab_begin(slab + 1); ++q)
-            one_pass_row(hv, b, m, list, hist, fh, qh, r3, dt, order(q));
-        });
-  }
+  if (near_mode == NearMode::Use)
+    one_pass_slabs<ExecSpace, Model, NearMode::Use>(hv, b, m, list, order, slab_begin, hist, fh, qh,
+                                                    rate, dt, near, slabs, batched);
+  else
+    one_pass_slabs<ExecSpace, Model, NearMode::Record>(hv, b, m, list, order, slab_begin, hist, fh,
+                                                       qh, rate, dt, near, slabs, batched);
 }
 
 // Which force pass a backend uses: one pass by slabs where threads are few and share
@@ -639,12 +732,12 @@ template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
-                    double dt, bool two_pass = !forces_by_slabs<ExecSpace>(), bool batched = true,
-                    bool thread_per_particle = false, bool started = false) {
+                    double dt, bool two_pass, const NearRows& near, NearMode near_mode,
+                    bool batched = true, bool thread_per_particle = false, bool started = false) {
   if (!two_pass) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
-      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, batched,
-                              started);
+      compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, near, near_mode,
+                              batched, started);
       return;
     }
   }

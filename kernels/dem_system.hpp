@@ -46,6 +46,11 @@ struct DemParams {
   int force_slabs = 0;      // host one-pass kernel: slabs along z (0: default_force_slabs(),
                             // six; a third of them run at once, see NeighborList::set_partition)
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
+  // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
+  // the owned entries within this gap of touching, read instead of the whole rows while no
+  // particle has moved half of it (the same bits either way). < 0: a quarter of `skin`;
+  // 0: no near list. Used in runs of at least kNearMinSteps steps without strain.
+  double near_skin = -1.0;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -53,6 +58,12 @@ struct DemParams {
 struct StepProfile {
   double integrate = 0, strain = 0, neighbor = 0, force = 0;
   long rebuilds = 0;
+};
+
+// How often the force passes recorded the near list and read it (NearRows; runs of step()
+// long enough for it).
+struct NearListUse {
+  long recordings = 0, reads = 0;
 };
 
 template <class ExecSpace, class Model>
@@ -99,12 +110,17 @@ class DemSystem {
     // The closing half kick of each step is deferred into the next step's first pass (same
     // arithmetic, one sweep less); the last one is applied before returning.
     const DampingStart damp = damping_start();
+    NearTrack near(near_usable(n, straining));
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp);
+      const double max_sq =
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed());
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
-      if (rebuild_due(max_sq)) rebuild();  // permutes f and torque with the particles
+      if (rebuild_due(max_sq)) {
+        rebuild();  // permutes f and torque with the particles
+        near.valid = false;
+      }
       walls_.update(time_ + dt);
-      forces(dt, damp.on);
+      forces(dt, damp.on, near_mode(near));
       time_ += dt;
       ++steps_;
     }
@@ -260,9 +276,12 @@ class DemSystem {
   const NeighborList<ExecSpace>& neighbor_list() const { return nl_; }
   const Model& model() const { return model_; }
   const DemParams& params() const { return params_; }
+  NearListUse near_list_use() const { return near_use_; }
   // The host kernel's contact batch on or off mid-run (the same bits either way): lets a
   // benchmark alternate the two on one trajectory.
   void set_batched_contacts(bool on) { params_.batched_contacts = on; }
+  // The near list's skin mid-run (DemParams::near_skin; the same bits for any value).
+  void set_near_skin(double skin) { params_.near_skin = skin; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   void set_clock(double t, long steps) {
@@ -364,16 +383,70 @@ class DemSystem {
     d.rotational = params_.damping.rotational;
     return d;
   }
+  // The near list within one call of step(): recorded by the first force pass, read by the
+  // next ones while no particle can have moved half the near skin since: each drift moves a
+  // particle by dt |v| at most (plus the round-off of its position), so the sum over the
+  // steps of dt times the largest speed (kick_drift's DriftSpeed) bounds every displacement.
+  // Recorded again when the bound reaches half the near skin and after a rebuild. Never
+  // carried from one call to the next (the state may be edited in between).
+  struct NearTrack {
+    bool on, valid = false;
+    double moved = 0.0;  // bound on any particle's displacement since the recording
+    DriftSpeed speed;
+    explicit NearTrack(bool use) : on(use) {}
+    DriftSpeed* drift_speed() { return on ? &speed : nullptr; }
+  };
+  // Runs shorter than this record the list more often than they read it.
+  static constexpr long kNearMinSteps = 16;
+  double near_skin() const {
+    return params_.near_skin < 0 ? 0.25 * params_.skin : params_.near_skin;
+  }
+  // A straining box moves every pair affinely (the list's skin test knows; the near list's
+  // does not): no near list there.
+  bool near_usable(long n, bool straining) const {
+    return !two_pass() && !straining && n >= kNearMinSteps && near_skin() > 0.0;
+  }
+  // Whether this step's force pass reads the near list (Use) or records it (Record), after
+  // the drift of the step (whose speed kick_drift measured).
+  NearMode near_mode(NearTrack& t) {
+    if (!t.on) return NearMode::Record;
+    // A position is rounded to the last bit of its coordinate (at most 1e-15 of the box's
+    // farthest coordinate), and dt |v| by a relative 1e-16; the margins cover both, and the
+    // round-off of the distances the near skin is tested with.
+    double extent = 0.0;
+    for (int d = 0; d < 3; ++d) extent = std::max(extent, std::fabs(box_.lo[d]) + box_.len[d]);
+    t.moved += params_.dt * std::sqrt(t.speed.max_v2) * (1.0 + 1e-12) + 1e-15 * extent;
+    if (t.valid && 2.0 * t.moved < near_skin() * (1.0 - 1e-9)) {  // false for NaN
+      ++near_use_.reads;
+      return NearMode::Use;
+    }
+    ++near_use_.recordings;
+    t.valid = true, t.moved = 0.0;
+    return NearMode::Record;
+  }
+  // Room for the near list's rows (host one-pass kernel): one slot per owned entry.
+  NearRows near_rows() {
+    if (two_pass()) return NearRows();
+    if (near_k_.extent(0) < static_cast<size_t>(nl_.num_pairs()) || near_k_.extent(0) == 0)
+      near_k_ = int_view(Kokkos::view_alloc("dem::near_entries", Kokkos::WithoutInitializing),
+                         nl_.num_pairs() + nl_.num_pairs() / 8 + 16);
+    if (near_count_.extent(0) != static_cast<size_t>(p_.n))
+      near_count_ = int_view("dem::near_count", p_.n);
+    NearRows r;
+    r.k = near_k_.data(), r.count = near_count_.data(), r.skin = near_skin();
+    return r;
+  }
   // `started`: f and torque already hold the damping terms (kick_drift with damping_start()).
-  void forces(double dt, bool started = false) {
+  // `near`: whether the pass reads the near list or records it (near_mode()).
+  void forces(double dt, bool started = false, NearMode near = NearMode::Record) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
                   wall_history_, wall_record_, params_.gravity, external_);
       return;
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass(), params_.batched_contacts, params_.contact_thread_per_particle,
-                   started);
+                   two_pass(), near_rows(), near, params_.batched_contacts,
+                   params_.contact_thread_per_particle, started);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);
@@ -394,20 +467,23 @@ class DemSystem {
       timer.reset();
     };
     const DampingStart damp = damping_start();
+    NearTrack near(near_usable(n, straining));
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp);
+      const double max_sq =
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp, near.drift_speed());
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);
       if (rebuild_due(max_sq)) {
         rebuild();
+        near.valid = false;
         ++profile_->rebuilds;
       }
       lap(profile_->neighbor);
       walls_.update(time_ + dt);
-      forces(dt, damp.on);
+      forces(dt, damp.on, near_mode(near));
       lap(profile_->force);
       kick<kRot>(p_, dt);
       lap(profile_->integrate);
@@ -458,6 +534,9 @@ class DemSystem {
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both
   MultiContactForces<ExecSpace> mc_;
+  using int_view = Kokkos::View<int*, typename ExecSpace::memory_space>;
+  int_view near_k_, near_count_;  // the near list's rows (host one-pass kernel)
+  NearListUse near_use_;
 };
 
 }  // namespace granular

@@ -5,6 +5,7 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <type_traits>
+#include <vector>
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
@@ -36,8 +37,9 @@ struct KickDriftRows {
   bool pending;
   DampingStart damp;
 
-  template <bool Rotations>
-  double run(int i0, int i1) const {
+  // `Speed`: the block's largest squared drift velocity also goes to max_v2 (NaN if any).
+  template <bool Rotations, bool Speed>
+  double run(int i0, int i1, double& max_v2) const {
     double* const xs = x;
     double* const vs = v;
     double* const fs = f;
@@ -53,9 +55,10 @@ struct KickDriftRows {
     bool per[3];
     for (int d = 0; d < 3; ++d) lo[d] = box.lo[d], len[d] = box.len[d], per[d] = box.periodic[d];
     double m = Kokkos::reduction_identity<double>::max();
+    double mv = max_v2;
     for (int i = i0; i < i1; ++i) {
       const double h = 0.5 * step / ms[i];
-      double d2 = 0.0;
+      double d2 = 0.0, v2 = 0.0;
       for (int d = 0; d < 3; ++d) {
         const double fd = fs[3 * i + d];
         const double v0 = pend ? vs[3 * i + d] + h * fd : vs[3 * i + d];
@@ -78,6 +81,7 @@ struct KickDriftRows {
             u += len[d];
         }
         d2 += u * u;
+        if (Speed) v2 += vd * vd;
       }
       if (Rotations) {
         const double hr = 0.5 * step / is[i];
@@ -90,15 +94,25 @@ struct KickDriftRows {
         }
       }
       m = d2 > m ? d2 : m;
+      // NaN counts as a move beyond any skin here: the near list is then recorded again.
+      if (Speed) mv = v2 > mv || v2 != v2 ? v2 : mv;
     }
+    max_v2 = mv;
     return m;
   }
+};
+
+// The largest squared drift velocity of a kick_drift pass (host backends), which bounds how
+// far any particle moved (DemSystem's near list, NearRows in kernels/contact_forces.hpp).
+struct DriftSpeed {
+  double max_v2 = 0.0;
 };
 
 template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
-                  bool pending = false, DampingStart damp = DampingStart()) {
+                  bool pending = false, DampingStart damp = DampingStart(),
+                  DriftSpeed* speed = nullptr) {
   if constexpr (std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>) {
     const KickDriftRows rows{
         p.x.data(),       p.v.data(),   p.f.data(), p.w.data(), p.torque.data(), p.mass.data(),
@@ -106,13 +120,33 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
     constexpr int kBlock = 512;  // particles per task
     const int n = p.n, blocks = (n + kBlock - 1) / kBlock;
     double max_sq = 0.0;
+    if (speed == nullptr) {
+      Kokkos::parallel_reduce(
+          "dem::VelocityVerlet::kick_drift_rows", Kokkos::RangePolicy<ExecSpace>(0, blocks),
+          [=](const int bk, double& m) {
+            double unused = 0.0;
+            const double mb =
+                rows.run<Rotations, false>(bk * kBlock, std::min(n, (bk + 1) * kBlock), unused);
+            m = mb > m ? mb : m;
+          },
+          Kokkos::Max<double>(max_sq));
+      return max_sq;
+    }
+    // Both maxima: the blocks' speeds go to a per-block array, reduced after (a maximum is
+    // exact in any order).
+    std::vector<double> block_speed(blocks, 0.0);
+    double* const bs = block_speed.data();
     Kokkos::parallel_reduce(
-        "dem::VelocityVerlet::kick_drift_rows", Kokkos::RangePolicy<ExecSpace>(0, blocks),
+        "dem::VelocityVerlet::kick_drift_rows_speed", Kokkos::RangePolicy<ExecSpace>(0, blocks),
         [=](const int bk, double& m) {
-          const double mb = rows.run<Rotations>(bk * kBlock, std::min(n, (bk + 1) * kBlock));
+          const double mb =
+              rows.run<Rotations, true>(bk * kBlock, std::min(n, (bk + 1) * kBlock), bs[bk]);
           m = mb > m ? mb : m;
         },
         Kokkos::Max<double>(max_sq));
+    double mv = 0.0;
+    for (int bk = 0; bk < blocks; ++bk) mv = bs[bk] > mv || bs[bk] != bs[bk] ? bs[bk] : mv;
+    speed->max_v2 = mv;
     return max_sq;
   }
   auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;

@@ -5,14 +5,16 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--alternate batch [--block B]] [--thread-per-particle] [--slabs S]
-//                        [--block-rows R]
+//                        [--near-skin S] [--alternate batch|near [--block B]]
+//                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
-// --alternate batch [--block B]: after the timed run, steps the same trajectory in blocks of B
-// steps (default 100) with the batch switched on and off in turn and reports the ratio of the
-// two rates (median over the pairs of blocks): an A/B comparison whose two sides share the
-// machine's slow phases, for changes smaller than the spread between runs.
+// --near-skin S: the force pass's near list (DemParams::near_skin: < 0 a quarter of the skin,
+// the default; 0 none; the same bits for any value).
+// --alternate batch|near [--block B]: after the timed run, steps the same trajectory in blocks
+// of B steps (default 100) with the batch (or the near list) switched on and off in turn and
+// reports the ratio of the two rates (median over the pairs of blocks): an A/B comparison whose
+// two sides share the machine's slow phases, for changes smaller than the spread between runs.
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -105,6 +107,7 @@ int main(int argc, char** argv) {
     bool triad = true, batched = true, per_particle = false;
     std::string alternate;
     long block = 100;
+    double near_skin = DemParams{}.near_skin;
     int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
@@ -135,6 +138,8 @@ int main(int argc, char** argv) {
         batched = false;
       else if (a == "--alternate")
         alternate = next();
+      else if (a == "--near-skin")
+        near_skin = std::stod(next());
       else if (a == "--block")
         block = std::stol(next());
       else if (a == "--thread-per-particle")
@@ -148,8 +153,8 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
-    if (!alternate.empty() && alternate != "batch") {
-      std::cerr << "--alternate takes batch, not " << alternate << "\n";
+    if (!alternate.empty() && alternate != "batch" && alternate != "near") {
+      std::cerr << "--alternate takes batch or near, not " << alternate << "\n";
       return 2;
     }
     if (block < 1) {
@@ -171,6 +176,7 @@ int main(int argc, char** argv) {
     result["steps_timed"] = steps;
     result["warmup_steps"] = warmup;
     result["batched_contacts"] = batched && cpu_has_avx();
+    result["near_skin"] = near_skin;
     result["force_slabs"] = slabs == 0 ? Json("automatic") : Json(slabs);
     result["cell_block_rows"] = block_rows;
     if (!forces_by_slabs<Exec>())
@@ -208,12 +214,13 @@ int main(int argc, char** argv) {
           StepProfile prof;
           double z_initial = 0, ekin_initial = 0, z_start = 0, z_end = 0, phi = 0, ekin_start = 0,
                  ekin_end = 0, erot_start = 0, erot_end = 0;
-          long builds = 0;
+          long builds = 0, near_recordings = 0, near_reads = 0;
           int slabs_used = 0;
           double entries = 0;
           for (int r = 0; r < reps; ++r) {
             DemParams prm = bench_params();
             prm.batched_contacts = batched;
+            prm.near_skin = near_skin;
             prm.contact_thread_per_particle = per_particle;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
@@ -227,6 +234,7 @@ int main(int argc, char** argv) {
             sys.step(warmup);
             const Measurements m0 = sys.measure();
             const long builds0 = sys.neighbor_list().builds();
+            const NearListUse near0 = sys.near_list_use();
             Kokkos::fence();
             Kokkos::Timer t;
             sys.step(steps);
@@ -238,6 +246,8 @@ int main(int argc, char** argv) {
             ekin_start = m0.ekin, ekin_end = m1.ekin, erot_start = m0.ekin_rot,
             erot_end = m1.ekin_rot;
             builds = sys.neighbor_list().builds() - builds0;
+            near_recordings = sys.near_list_use().recordings - near0.recordings;
+            near_reads = sys.near_list_use().reads - near0.reads;
             entries = sys.neighbor_list().num_entries();
             slabs_used = sys.neighbor_list().num_slabs();
             if (!alternate.empty()) {  // switched on (A) and off (B) in turn, same trajectory
@@ -247,7 +257,10 @@ int main(int argc, char** argv) {
                 double sec[2];
                 for (int side = 0; side < 2; ++side) {
                   const bool on = side == 0;
-                  sys.set_batched_contacts(on);
+                  if (alternate == "batch")
+                    sys.set_batched_contacts(on);
+                  else
+                    sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
                   Kokkos::Timer tb;
                   sys.step(block);
@@ -258,6 +271,7 @@ int main(int argc, char** argv) {
                 ratio.push_back(sec[1] / sec[0]);
               }
               sys.set_batched_contacts(batched);
+              sys.set_near_skin(near_skin);
               std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
                         << " on/off rate ratio, median of " << ratio.size() << " block pairs "
                         << median(ratio) << ", of the sums " << t_off / t_on << "\n";
@@ -327,6 +341,8 @@ int main(int argc, char** argv) {
           row["ekin_translational_after_timed_run_J"] = (ekin_end - erot_end) * 1e-3;
           row["neighbors_per_particle_full_list"] = nb;
           row["neighbor_builds_in_timed_window"] = builds;
+          row["near_list_recordings_in_timed_window"] = near_recordings;
+          row["near_list_reads_in_timed_window"] = near_reads;
           if (forces_by_slabs<Exec>()) row["force_slabs"] = slabs_used;
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;

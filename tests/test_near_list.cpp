@@ -1,0 +1,136 @@
+// The near list of the host one-pass kernel (NearRows in kernels/contact_forces.hpp): the
+// force passes that read only the owned entries within the near skin give the trajectory of
+// the passes that read whole rows, bit for bit, for every host law path (frictionless contact
+// by contact, frictional in batches and contact by contact, rolling springs), through
+// neighbour rebuilds and through recordings forced by particles that move more than half the
+// near skin; and a run cut into calls too short for the near list (which then reads whole
+// rows) ends on the same bits.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/rng.hpp"
+#include "exec_spaces.hpp"
+#include "kernels/contact_model.hpp"
+#include "kernels/dem_system.hpp"
+#include "scenarios/common/packing.hpp"
+
+using namespace granular;
+
+namespace {
+
+using Frictionless = ContactModel<LinearNormal, NoTangential>;
+using Frictional = ContactModel<LinearNormal, CoulombTangential>;
+using Rolling = ContactModel<LinearNormal, CoulombTangential, RollingTorsion>;
+
+Frictionless make_model(Frictionless*) { return {LinearNormal::uniform(1e5, 1000), {}, {}}; }
+Frictional make_model(Frictional*) {
+  return {LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.5), {}};
+}
+Rolling make_model(Rolling*) {
+  return {LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.5),
+          RollingTorsion::uniform({2e4, 50, 0.1, 2e4, 50, 0.1})};
+}
+
+template <class Exec, class V>
+std::vector<double> host_copy(const V& v) {
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+  return std::vector<double>(h.data(), h.data() + h.size());
+}
+
+// A loaded packing (compressed to phi ~ 0.64, then the strain stopped), stirred by random
+// velocities large enough to move particles by more than the skin in the run below.
+template <class Exec, class Model>
+DemSystem<Exec, Model> stirred_packing(const DemParams& prm) {
+  PeriodicBox box;
+  GasSpec g;
+  g.count = 2000, g.diameter_min = 1, g.diameter_max = 1.4, g.density = 2000, g.phi = 0.35;
+  g.speed = 0.01, g.seed = 5;
+  const HostParticles h = random_gas(g, box);
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, make_model((Model*)nullptr), prm);
+  sys.set_strain_rate(-3e-2, -3e-2, -3e-2);
+  sys.step(1700);
+  sys.set_strain_rate(0, 0, 0);
+  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().v);
+  for (int i = 0; i < sys.particles().n; ++i) {
+    Stream s(77, i);
+    for (int d = 0; d < 3; ++d) v(i, d) += s.uniform(-0.06, 0.06);
+  }
+  Kokkos::deep_copy(sys.particles().v, v);
+  sys.refresh_forces();
+  return sys;
+}
+
+template <class Exec, class Model>
+void expect_same_bits(DemSystem<Exec, Model>& a, DemSystem<Exec, Model>& b, const char* what) {
+  const auto& p = a.particles();
+  const auto& q = b.particles();
+  EXPECT_EQ(host_copy<Exec>(p.x), host_copy<Exec>(q.x)) << what;
+  EXPECT_EQ(host_copy<Exec>(p.v), host_copy<Exec>(q.v)) << what;
+  EXPECT_EQ(host_copy<Exec>(p.f), host_copy<Exec>(q.f)) << what;
+  EXPECT_EQ(host_copy<Exec>(p.w), host_copy<Exec>(q.w)) << what;
+  EXPECT_EQ(host_copy<Exec>(p.torque), host_copy<Exec>(q.torque)) << what;
+  if (Model::history > 0) {
+    EXPECT_EQ(host_copy<Exec>(a.history_view()), host_copy<Exec>(b.history_view())) << what;
+  }
+}
+
+template <class Exec, class Model>
+void compare_with_whole_rows(bool batched) {
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
+  prm.damping.rotational = 5;
+  prm.batched_contacts = batched;
+  DemParams whole = prm, fine = prm;
+  whole.near_skin = 0.0;   // no near list: every pass reads the whole rows
+  fine.near_skin = 0.012;  // recorded again every few steps
+  auto a = stirred_packing<Exec, Model>(prm);
+  auto b = stirred_packing<Exec, Model>(whole);
+  auto c = stirred_packing<Exec, Model>(fine);
+  auto d = stirred_packing<Exec, Model>(prm);
+  const long builds0 = a.neighbor_list().builds();
+  const Measurements m0 = a.measure();
+  for (int call = 0; call < 3; ++call) {
+    a.step(200);
+    b.step(200);
+    c.step(200);
+  }
+  for (int s = 0; s < 600; ++s) d.step(1);  // calls too short for the near list
+  ASSERT_GT(m0.contacts, a.particles().n) << "too few contacts for the comparison to bite";
+  ASSERT_GT(a.neighbor_list().builds(), builds0 + 2) << "the run must cross rebuilds";
+  ASSERT_NE(a.measure().contacts, m0.contacts) << "the contacts must change during the run";
+  const NearListUse ua = a.near_list_use(), ub = b.near_list_use(), uc = c.near_list_use();
+  const NearListUse ud = d.near_list_use();
+  EXPECT_GT(ua.reads, 2 * ua.recordings) << "the default near skin is read more than recorded";
+  EXPECT_GT(uc.recordings, a.neighbor_list().builds() - builds0 + 10)
+      << "the fine near skin must be recorded again between rebuilds";
+  EXPECT_GT(uc.reads, 0) << "recordings " << uc.recordings;
+  EXPECT_EQ(ub.reads, 0);
+  EXPECT_EQ(ud.reads, 0);
+  expect_same_bits(a, b, "default near skin against whole rows");
+  expect_same_bits(c, b, "fine near skin against whole rows");
+  expect_same_bits(d, b, "single steps against whole rows");
+}
+
+}  // namespace
+
+template <class T>
+class NearListTest : public ::testing::Test {};
+TYPED_TEST_SUITE(NearListTest, granular::testing::ExecSpaces);
+
+TYPED_TEST(NearListTest, FrictionlessRowsReadFromTheNearListGiveTheSameBits) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_with_whole_rows<TypeParam, Frictionless>(true);
+}
+
+TYPED_TEST(NearListTest, FrictionalBatchedAndScalarRowsFromTheNearListGiveTheSameBits) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_with_whole_rows<TypeParam, Frictional>(true);
+  compare_with_whole_rows<TypeParam, Frictional>(false);
+}
+
+TYPED_TEST(NearListTest, RollingSpringRowsFromTheNearListGiveTheSameBits) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_with_whole_rows<TypeParam, Rolling>(true);
+}
