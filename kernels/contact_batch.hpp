@@ -186,68 +186,96 @@ struct ContactBatch {
       evaluate_lanes<false>(dt);
   }
 
+  // One vector of contacts: the law's inputs (the spring s0..s2 in and out) and outputs.
+  struct Lanes {
+    V X, Y, Z, ai, aj, d0, d1, d2, wi0, wi1, wi2, wj0, wj1, wj2, s0, s1, s2;
+    V F0, F1, F2, q0, q1, q2, p0, p1, p2;  // force on i, torques on i and j
+  };
+  struct LaneParams {
+    V kn, gn, kt, gt, mus, mud;
+  };
+
   template <bool Uniform>
   GRANULAR_AVX void evaluate_lanes(double dt) {
-    const V one = splat(1.0), zero = splat(0.0), half = splat(0.5), vdt = splat(dt);
+    const V vdt = splat(dt);
     for (int c = 0; c < n; c += kW) {
-      const V X = load(rx + c), Y = load(ry + c), Z = load(rz + c);
-      const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
-      const V inv = one / r;
-      const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
-      const V a_i = load(ai + c), a_j = load(aj + c);
-      const V delta = a_i + a_j - r;
-      const V d0 = load(dv0 + c), d1 = load(dv1 + c), d2 = load(dv2 + c);
-      const V vn = d0 * n0 + d1 * n1 + d2 * n2;
-      const V fn = par<Uniform>(kn + c, ukn) * delta + par<Uniform>(gn + c, ugn) * -vn;
-      V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
-      const V li = a_i - half * delta, lj = a_j - half * delta;
-      const V aw0 = li * load(wi0 + c) + lj * load(wj0 + c);
-      const V aw1 = li * load(wi1 + c) + lj * load(wj1 + c);
-      const V aw2 = li * load(wi2 + c) + lj * load(wj2 + c);
-      const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
-      const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
-      // rotate_into_plane: an empty spring stays as it is.
-      V s0 = load(h0 + c), s1 = load(h1 + c), s2 = load(h2 + c);
-      const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
-      const M empty = len_sq == zero;
-      const V sn = s0 * n0 + s1 * n1 + s2 * n2;
-      const V x = sn * sn / sel(empty, one, len_sq);
-      const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
-      const M small = x < splat(1e-4);
-      V scale = taylor;
-      if (!all(small)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
-      s0 = sel(empty, s0, (s0 - sn * n0) * scale);
-      s1 = sel(empty, s1, (s1 - sn * n1) * scale);
-      s2 = sel(empty, s2, (s2 - sn * n2) * scale);
-      s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
-      // coulomb_spring with k = kt, g = gt.
-      const V k = par<Uniform>(kt + c, ukt), g = par<Uniform>(gt + c, ugt), nk = -k;
-      V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
-      const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
-      const V afn = sel(fn < zero, -fn, fn);
-      const V limit = par<Uniform>(mus + c, umus) * afn;
-      const M slides = f_sq > limit * limit;
-      if (any(slides)) {
-        const V fmag = vsqrt(f_sq);
-        const V slide = par<Uniform>(mud + c, umud) * afn;
-        const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
-        const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
-        const M stiff = k > zero;
-        const V kk = sel(stiff, k, one);
-        s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
-        s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
-        s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
-        t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
-      }
-      store(h0 + c, s0), store(h1 + c, s1), store(h2 + c, s2);
-      F0 += t0, F1 += t1, F2 += t2;
-      // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
-      const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
-      const V mli = -li, mlj = -lj;
-      store(q0 + c, mli * x0), store(q1 + c, mli * x1), store(q2 + c, mli * x2);
-      store(p0 + c, mlj * x0), store(p1 + c, mlj * x1), store(p2 + c, mlj * x2);
-      store(f0 + c, F0), store(f1 + c, F1), store(f2 + c, F2);
+      Lanes l;
+      l.X = load(rx + c), l.Y = load(ry + c), l.Z = load(rz + c);
+      l.ai = load(ai + c), l.aj = load(aj + c);
+      l.d0 = load(dv0 + c), l.d1 = load(dv1 + c), l.d2 = load(dv2 + c);
+      l.wi0 = load(wi0 + c), l.wi1 = load(wi1 + c), l.wi2 = load(wi2 + c);
+      l.wj0 = load(wj0 + c), l.wj1 = load(wj1 + c), l.wj2 = load(wj2 + c);
+      l.s0 = load(h0 + c), l.s1 = load(h1 + c), l.s2 = load(h2 + c);
+      const LaneParams p{par<Uniform>(kn + c, ukn),   par<Uniform>(gn + c, ugn),
+                         par<Uniform>(kt + c, ukt),   par<Uniform>(gt + c, ugt),
+                         par<Uniform>(mus + c, umus), par<Uniform>(mud + c, umud)};
+      law(l, p, vdt);
+      store(h0 + c, l.s0), store(h1 + c, l.s1), store(h2 + c, l.s2);
+      store(q0 + c, l.q0), store(q1 + c, l.q1), store(q2 + c, l.q2);
+      store(p0 + c, l.p0), store(p1 + c, l.p1), store(p2 + c, l.p2);
+      store(f0 + c, l.F0), store(f1 + c, l.F1), store(f2 + c, l.F2);
     }
+  }
+
+  // The law on one vector of contacts (also the near stream's, kernels/near_stream.hpp).
+  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt) {
+    const V one = splat(1.0), zero = splat(0.0), half = splat(0.5);
+    const V X = l.X, Y = l.Y, Z = l.Z;
+    const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
+    const V inv = one / r;
+    const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
+    const V a_i = l.ai, a_j = l.aj;
+    const V delta = a_i + a_j - r;
+    const V d0 = l.d0, d1 = l.d1, d2 = l.d2;
+    const V vn = d0 * n0 + d1 * n1 + d2 * n2;
+    const V fn = p.kn * delta + p.gn * -vn;
+    V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
+    const V li = a_i - half * delta, lj = a_j - half * delta;
+    const V aw0 = li * l.wi0 + lj * l.wj0;
+    const V aw1 = li * l.wi1 + lj * l.wj1;
+    const V aw2 = li * l.wi2 + lj * l.wj2;
+    const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
+    const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
+    // rotate_into_plane: an empty spring stays as it is.
+    V s0 = l.s0, s1 = l.s1, s2 = l.s2;
+    const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
+    const M empty = len_sq == zero;
+    const V sn = s0 * n0 + s1 * n1 + s2 * n2;
+    const V x = sn * sn / sel(empty, one, len_sq);
+    const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
+    const M small = x < splat(1e-4);
+    V scale = taylor;
+    if (!all(small)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
+    s0 = sel(empty, s0, (s0 - sn * n0) * scale);
+    s1 = sel(empty, s1, (s1 - sn * n1) * scale);
+    s2 = sel(empty, s2, (s2 - sn * n2) * scale);
+    s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
+    // coulomb_spring with k = kt, g = gt.
+    const V k = p.kt, g = p.gt, nk = -k;
+    V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
+    const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
+    const V afn = sel(fn < zero, -fn, fn);
+    const V limit = p.mus * afn;
+    const M slides = f_sq > limit * limit;
+    if (any(slides)) {
+      const V fmag = vsqrt(f_sq);
+      const V slide = p.mud * afn;
+      const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
+      const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
+      const M stiff = k > zero;
+      const V kk = sel(stiff, k, one);
+      s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
+      s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
+      s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
+      t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+    }
+    l.s0 = s0, l.s1 = s1, l.s2 = s2;
+    l.F0 = F0 + t0, l.F1 = F1 + t1, l.F2 = F2 + t2;
+    // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
+    const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
+    const V mli = -li, mlj = -lj;
+    l.q0 = mli * x0, l.q1 = mli * x1, l.q2 = mli * x2;
+    l.p0 = mlj * x0, l.p1 = mlj * x1, l.p2 = mlj * x2;
   }
 };
 

@@ -10,6 +10,8 @@
 #include "core/particles.hpp"
 #include "kernels/contact_batch.hpp"
 #include "kernels/contact_model.hpp"
+#include "kernels/host_rows.hpp"
+#include "kernels/near_stream.hpp"
 #include "kernels/neighbor_list.hpp"
 
 namespace granular {
@@ -317,55 +319,6 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
       });
 }
 
-// Raw-pointer views of the particle fields for the host kernel: the same accessors as
-// ParticleViews, without the View's run-time strides and the reloads of its metadata that
-// the compiler cannot rule out around the scattered stores.
-struct HostVec3 {
-  double* p;
-  KOKKOS_FORCEINLINE_FUNCTION double& operator()(int i, int d) const { return p[3 * i + d]; }
-};
-template <class T>
-struct HostArray {
-  T* p;
-  KOKKOS_FORCEINLINE_FUNCTION T& operator()(int i) const { return p[i]; }
-};
-struct HostParticleViews {
-  HostVec3 x, v, w;
-  HostArray<double> radius, mass;
-  HostArray<int> species;
-  template <class ExecSpace>
-  explicit HostParticleViews(const Particles<ExecSpace>& p)
-      : x{p.x.data()},
-        v{p.v.data()},
-        w{p.w.data()},
-        radius{p.radius.data()},
-        mass{p.mass.data()},
-        species{p.species.data()} {}
-};
-
-// The neighbour list's rows for the host kernel (raw pointers, as HostParticleViews).
-struct HostListRows {
-  HostArray<const int> offsets, owned_end, neighbors, pair_begin;
-  template <class ExecSpace>
-  explicit HostListRows(const NeighborList<ExecSpace>& nl)
-      : offsets{nl.offsets().data()},
-        owned_end{nl.owned_end().data()},
-        neighbors{nl.neighbors().data()},
-        pair_begin{nl.pair_begin().data()} {}
-};
-
-// A contact that is apart forgets its history. Most such slots are already zero: reading is
-// cheaper than rewriting them every step.
-template <int H>
-KOKKOS_FORCEINLINE_FUNCTION void forget_history(double* hist, int k) {
-  if (H > 0) {
-    bool stale = false;
-    for (int c = 0; c < H; ++c) stale = stale || hist[k * H + c] != 0.0;
-    if (stale)
-      for (int c = 0; c < H; ++c) hist[k * H + c] = 0.0;
-  }
-}
-
 // A stretch of an owner row for the host kernel, split into its touching entries (list
 // order, with the separation found by the distance test) and its apart ones. In a dense
 // packing whether a listed pair touches is close to a coin toss, so a branch per entry was
@@ -396,18 +349,6 @@ KOKKOS_FORCEINLINE_FUNCTION double min_image_of(double dx, double l, bool period
   return dx;
 }
 
-// The near list of the host kernel: each particle's owned entries within a second, smaller
-// skin of touching, in list order (a subsequence of its row). While no particle has moved
-// half that skin since it was recorded, every other entry of the row is apart and stays
-// apart, its history already forgotten: the force pass reads only the near entries, and the
-// touching contacts, their order and so every sum are the same as from the whole row.
-// Recorded by any force pass over the whole rows (ListEntries), read by the next ones
-// (NearEntries); DemSystem decides which (near_skin in DemParams).
-struct NearRows {
-  int* k = nullptr;      // near entries (list indices), particle i's from pair_begin(i) on
-  int* count = nullptr;  // near entries per particle
-  double skin = 0.0;     // the near skin the rows are recorded with
-};
 // The entries a row split reads. ListEntries: the row's own entries e = k, recording those
 // within the near skin into `near` (i's near row; the next slot is `kept`: a slot never
 // beyond the entry being read, so every store stays inside i's row).
@@ -642,6 +583,25 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
 #if GRANULAR_CONTACT_BATCH
   if constexpr (ContactBatchLaw<Model>::available) {
     if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(m)) {
+      NearStream* const st = nr.stream;
+      const bool stream = st != nullptr && near_stream_usable(m);
+      if (Mode == NearMode::Use && stream && st->ready) {
+        const int *si = st->i.data(), *sj = st->j.data(), *sr = st->r.data();
+        const int *sb = st->begin.data(), *se = st->empty.data(), *eb = st->empty_begin.data();
+        const LinearNormal::Params pn = m.normal.table(0, 0);
+        const CoulombTangential::Params pt = m.tangential.table(0, 0);
+        ++st->reads;
+        for (int r = 0; r < rounds; ++r) {
+          const int tasks = (slabs - r + rounds - 1) / rounds;
+          Kokkos::parallel_for("dem::compute_forces::near_stream", Policy(0, tasks),
+                               [=](const int t) {
+                                 const int s = t * rounds + r;
+                                 near_stream_slab(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se,
+                                                  eb[s], eb[s + 1], hist, fh, qh, rt, dt);
+                               });
+        }
+        return;
+      }
       for (int r = 0; r < rounds; ++r) {
         const int tasks = (slabs - r + rounds - 1) / rounds;
         Kokkos::parallel_for("dem::compute_forces::slabs", Policy(0, tasks), [=](const int t) {
@@ -650,6 +610,8 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
                                              slab_begin(slab), slab_begin(slab + 1));
         });
       }
+      if (Mode == NearMode::Record && stream)
+        record_near_stream<ExecSpace>(*st, list, order, slab_begin, slabs, nr);
       return;
     }
   }
@@ -713,12 +675,17 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
             for (int d = 0; d < 3; ++d) torque(i, d) = -gr * pv.w(i, d);
         });
   const int slabs = nl.num_slabs();
+  NearRows nr = near;
+  if (nr.stream != nullptr) {
+    if (near_mode == NearMode::Record) nr.stream->ready = false;  // until recorded again
+    if (!near_stream_indexable(nl.num_pairs(), p.n)) nr.stream = nullptr;
+  }
   if (near_mode == NearMode::Use)
     one_pass_slabs<ExecSpace, Model, NearMode::Use>(hv, b, m, list, order, slab_begin, hist, fh, qh,
-                                                    rate, dt, near, slabs, batched);
+                                                    rate, dt, nr, slabs, batched);
   else
     one_pass_slabs<ExecSpace, Model, NearMode::Record>(hv, b, m, list, order, slab_begin, hist, fh,
-                                                       qh, rate, dt, near, slabs, batched);
+                                                       qh, rate, dt, nr, slabs, batched);
 }
 
 // Which force pass a backend uses: one pass by slabs where threads are few and share

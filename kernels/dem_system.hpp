@@ -51,6 +51,10 @@ struct DemParams {
   // particle has moved half of it (the same bits either way). < 0: a quarter of `skin`;
   // 0: no near list. Used in runs of at least kNearMinSteps steps without strain.
   double near_skin = -1.0;
+  // Host one-pass kernel, batched law with one parameter set: the near list also recorded as
+  // a flat stream of contacts and read four at a time (kernels/near_stream.hpp; the same
+  // bits either way).
+  bool near_stream = true;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -64,6 +68,7 @@ struct StepProfile {
 // long enough for it).
 struct NearListUse {
   long recordings = 0, reads = 0;
+  long stream_reads = 0;  // reads served by the near list's stream (kernels/near_stream.hpp)
 };
 
 template <class ExecSpace, class Model>
@@ -120,7 +125,7 @@ class DemSystem {
         near.valid = false;
       }
       walls_.update(time_ + dt);
-      forces(dt, damp.on, near_mode(near));
+      forces(dt, damp.on, near_mode(near), near.on);
       time_ += dt;
       ++steps_;
     }
@@ -276,12 +281,18 @@ class DemSystem {
   const NeighborList<ExecSpace>& neighbor_list() const { return nl_; }
   const Model& model() const { return model_; }
   const DemParams& params() const { return params_; }
-  NearListUse near_list_use() const { return near_use_; }
+  NearListUse near_list_use() const {
+    NearListUse u = near_use_;
+    u.stream_reads = near_stream_.reads;
+    return u;
+  }
   // The host kernel's contact batch on or off mid-run (the same bits either way): lets a
   // benchmark alternate the two on one trajectory.
   void set_batched_contacts(bool on) { params_.batched_contacts = on; }
   // The near list's skin mid-run (DemParams::near_skin; the same bits for any value).
   void set_near_skin(double skin) { params_.near_skin = skin; }
+  // The near list's stream on or off mid-run (DemParams::near_stream; the same bits).
+  void set_near_stream(bool on) { params_.near_stream = on; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   void set_clock(double t, long steps) {
@@ -425,7 +436,9 @@ class DemSystem {
     return NearMode::Record;
   }
   // Room for the near list's rows (host one-pass kernel): one slot per owned entry.
-  NearRows near_rows() {
+  // `tracked`: the near list is kept within this call of step() (NearTrack::on), so its stream
+  // may be recorded and read too.
+  NearRows near_rows(bool tracked) {
     if (two_pass()) return NearRows();
     if (near_k_.extent(0) < static_cast<size_t>(nl_.num_pairs()) || near_k_.extent(0) == 0)
       near_k_ = int_view(Kokkos::view_alloc("dem::near_entries", Kokkos::WithoutInitializing),
@@ -434,18 +447,21 @@ class DemSystem {
       near_count_ = int_view("dem::near_count", p_.n);
     NearRows r;
     r.k = near_k_.data(), r.count = near_count_.data(), r.skin = near_skin();
+    if (tracked && params_.near_stream) r.stream = &near_stream_;
     return r;
   }
   // `started`: f and torque already hold the damping terms (kick_drift with damping_start()).
   // `near`: whether the pass reads the near list or records it (near_mode()).
-  void forces(double dt, bool started = false, NearMode near = NearMode::Record) {
+  // `tracked`: see near_rows().
+  void forces(double dt, bool started = false, NearMode near = NearMode::Record,
+              bool tracked = false) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
                   wall_history_, wall_record_, params_.gravity, external_);
       return;
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass(), near_rows(), near, params_.batched_contacts,
+                   two_pass(), near_rows(tracked), near, params_.batched_contacts,
                    params_.contact_thread_per_particle, started);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
@@ -483,7 +499,7 @@ class DemSystem {
       }
       lap(profile_->neighbor);
       walls_.update(time_ + dt);
-      forces(dt, damp.on, near_mode(near));
+      forces(dt, damp.on, near_mode(near), near.on);
       lap(profile_->force);
       kick<kRot>(p_, dt);
       lap(profile_->integrate);
@@ -536,6 +552,7 @@ class DemSystem {
   MultiContactForces<ExecSpace> mc_;
   using int_view = Kokkos::View<int*, typename ExecSpace::memory_space>;
   int_view near_k_, near_count_;  // the near list's rows (host one-pass kernel)
+  NearStream near_stream_;        // and their stream (kernels/near_stream.hpp)
   NearListUse near_use_;
 };
 

@@ -1,7 +1,8 @@
 // Host-side vector code for x86-64 GNU builds: the target attributes that compile single
 // functions for AVX while the rest of the build stays portable, and the run-time check that
-// decides whether those functions may run. Users: the contact batch (kernels/contact_batch.hpp)
-// and the neighbour build's candidate sweep (kernels/neighbor_sweep.hpp).
+// decides whether those functions may run. Users: the contact batch (kernels/contact_batch.hpp),
+// the neighbour build's candidate sweep (kernels/neighbor_sweep.hpp) and the near stream
+// (kernels/near_stream.hpp).
 #pragma once
 
 #if defined(__GNUC__) && !defined(__CUDACC__) && !defined(__clang__) && defined(__x86_64__)
@@ -9,6 +10,9 @@
 #define GRANULAR_AVX __attribute__((target("avx")))
 #define GRANULAR_AVX_INLINE __attribute__((target("avx"), always_inline)) inline
 #define GRANULAR_ALWAYS_INLINE __attribute__((always_inline)) inline
+// AVX2 for the gathers of the near stream (kernels/near_stream.hpp).
+#define GRANULAR_AVX2 __attribute__((target("avx2")))
+#define GRANULAR_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
 #else
 #define GRANULAR_HOST_AVX 0
 #endif
@@ -22,6 +26,19 @@ inline bool cpu_has_avx() {
   static const bool has = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx") != 0;
+  }();
+  return has;
+#else
+  return false;
+#endif
+}
+
+// Whether this processor runs AVX2 instructions (false where no AVX code is compiled).
+inline bool cpu_has_avx2() {
+#if GRANULAR_HOST_AVX
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
   }();
   return has;
 #else

@@ -5,16 +5,17 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--near-skin S] [--alternate batch|near [--block B]]
+//                        [--near-skin S] [--alternate batch|near|stream [--block B]]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --near-skin S: the force pass's near list (DemParams::near_skin: < 0 a quarter of the skin,
 // the default; 0 none; the same bits for any value).
-// --alternate batch|near [--block B]: after the timed run, steps the same trajectory in blocks
-// of B steps (default 100) with the batch (or the near list) switched on and off in turn and
-// reports the ratio of the two rates (median over the pairs of blocks): an A/B comparison whose
-// two sides share the machine's slow phases, for changes smaller than the spread between runs.
+// --alternate batch|near|stream [--block B]: after the timed run, steps the same trajectory in
+// blocks of B steps (default 100) with the batch (the near list, the near list's stream)
+// switched on and off in turn and reports the ratio of the two rates (median over the pairs of
+// blocks): an A/B comparison whose two sides share the machine's slow phases, for changes
+// smaller than the spread between runs.
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -153,8 +154,9 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
-    if (!alternate.empty() && alternate != "batch" && alternate != "near") {
-      std::cerr << "--alternate takes batch or near, not " << alternate << "\n";
+    if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
+        alternate != "stream") {
+      std::cerr << "--alternate takes batch, near or stream, not " << alternate << "\n";
       return 2;
     }
     if (block < 1) {
@@ -259,6 +261,8 @@ int main(int argc, char** argv) {
                   const bool on = side == 0;
                   if (alternate == "batch")
                     sys.set_batched_contacts(on);
+                  else if (alternate == "stream")
+                    sys.set_near_stream(on);
                   else
                     sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
@@ -272,6 +276,7 @@ int main(int argc, char** argv) {
               }
               sys.set_batched_contacts(batched);
               sys.set_near_skin(near_skin);
+              sys.set_near_stream(true);
               std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
                         << " on/off rate ratio, median of " << ratio.size() << " block pairs "
                         << median(ratio) << ", of the sums " << t_off / t_on << "\n";

@@ -19,6 +19,7 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
+#include "test_support.hpp"
 
 using namespace granular;
 
@@ -57,9 +58,7 @@ std::vector<double> host_copy(const V& v) {
   return std::vector<double>(h.data(), h.data() + h.size());
 }
 
-bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
+using granular::testing::bitwise_equal;
 
 template <class Exec, class Model>
 void expect_bitwise_equal(const DemSystem<Exec, Model>& a, const DemSystem<Exec, Model>& b) {

@@ -4,7 +4,9 @@
 // by contact, frictional in batches and contact by contact, rolling springs), through
 // neighbour rebuilds and through recordings forced by particles that move more than half the
 // near skin; and a run cut into calls too short for the near list (which then reads whole
-// rows) ends on the same bits.
+// rows) ends on the same bits. The near list's stream (kernels/near_stream.hpp) gives the
+// bits of the batched near rows, signed zeros of rows without near entries included, and
+// leaves laws with several parameter sets to the rows.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,8 +17,10 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
+#include "test_support.hpp"
 
 using namespace granular;
+using granular::testing::bitwise_equal;
 
 namespace {
 
@@ -42,13 +46,14 @@ std::vector<double> host_copy(const V& v) {
 // A loaded packing (compressed to phi ~ 0.64, then the strain stopped), stirred by random
 // velocities large enough to move particles by more than the skin in the run below.
 template <class Exec, class Model>
-DemSystem<Exec, Model> stirred_packing(const DemParams& prm) {
+DemSystem<Exec, Model> stirred_packing(const DemParams& prm,
+                                       const Model& model = make_model((Model*)nullptr)) {
   PeriodicBox box;
   GasSpec g;
   g.count = 2000, g.diameter_min = 1, g.diameter_max = 1.4, g.density = 2000, g.phi = 0.35;
   g.speed = 0.01, g.seed = 5;
   const HostParticles h = random_gas(g, box);
-  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, make_model((Model*)nullptr), prm);
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
   sys.set_strain_rate(-3e-2, -3e-2, -3e-2);
   sys.step(1700);
   sys.set_strain_rate(0, 0, 0);
@@ -66,13 +71,15 @@ template <class Exec, class Model>
 void expect_same_bits(DemSystem<Exec, Model>& a, DemSystem<Exec, Model>& b, const char* what) {
   const auto& p = a.particles();
   const auto& q = b.particles();
-  EXPECT_EQ(host_copy<Exec>(p.x), host_copy<Exec>(q.x)) << what;
-  EXPECT_EQ(host_copy<Exec>(p.v), host_copy<Exec>(q.v)) << what;
-  EXPECT_EQ(host_copy<Exec>(p.f), host_copy<Exec>(q.f)) << what;
-  EXPECT_EQ(host_copy<Exec>(p.w), host_copy<Exec>(q.w)) << what;
-  EXPECT_EQ(host_copy<Exec>(p.torque), host_copy<Exec>(q.torque)) << what;
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(p.x), host_copy<Exec>(q.x))) << what << ": x";
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(p.v), host_copy<Exec>(q.v))) << what << ": v";
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(p.f), host_copy<Exec>(q.f))) << what << ": f";
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(p.w), host_copy<Exec>(q.w))) << what << ": w";
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(p.torque), host_copy<Exec>(q.torque)))
+      << what << ": torque";
   if (Model::history > 0) {
-    EXPECT_EQ(host_copy<Exec>(a.history_view()), host_copy<Exec>(b.history_view())) << what;
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.history_view()), host_copy<Exec>(b.history_view())))
+        << what << ": springs";
   }
 }
 
@@ -113,6 +120,39 @@ void compare_with_whole_rows(bool batched) {
   expect_same_bits(d, b, "single steps against whole rows");
 }
 
+// The stream against the batched near rows (stream off) and whole rows (no near list).
+template <class Exec>
+void compare_stream_with_rows(double near_skin) {
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
+  prm.damping.rotational = 5;
+  prm.near_skin = near_skin;
+  DemParams rows = prm, whole = prm;
+  rows.near_stream = false;
+  whole.near_skin = 0.0;
+  auto a = stirred_packing<Exec, Frictional>(prm);
+  auto b = stirred_packing<Exec, Frictional>(rows);
+  auto c = stirred_packing<Exec, Frictional>(whole);
+  const long builds0 = a.neighbor_list().builds();
+  for (int call = 0; call < 3; ++call) {
+    a.step(200);
+    b.step(200);
+    c.step(200);
+  }
+  ASSERT_GT(a.neighbor_list().builds(), builds0 + 2) << "the run must cross rebuilds";
+  const NearListUse ua = a.near_list_use(), ub = b.near_list_use();
+  EXPECT_EQ(ua.reads, ub.reads);
+  EXPECT_EQ(ua.recordings, ub.recordings);
+  EXPECT_EQ(ub.stream_reads, 0);
+  if (cpu_has_avx2()) {
+    EXPECT_EQ(ua.stream_reads, ua.reads) << "every read of the near list takes the stream";
+  } else {
+    EXPECT_EQ(ua.stream_reads, 0);
+  }
+  expect_same_bits(a, b, "stream against the batched near rows");
+  expect_same_bits(a, c, "stream against whole rows");
+}
+
 }  // namespace
 
 template <class T>
@@ -133,4 +173,70 @@ TYPED_TEST(NearListTest, FrictionalBatchedAndScalarRowsFromTheNearListGiveTheSam
 TYPED_TEST(NearListTest, RollingSpringRowsFromTheNearListGiveTheSameBits) {
   if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
   compare_with_whole_rows<TypeParam, Rolling>(true);
+}
+
+TYPED_TEST(NearListTest, FrictionalStreamOfTheNearListGivesTheBitsOfItsRows) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_stream_with_rows<TypeParam>(-1.0);   // the default near skin
+  compare_stream_with_rows<TypeParam>(0.012);  // recorded again every few steps
+}
+
+TYPED_TEST(NearListTest, LawsWithSeveralParameterSetsReadTheNearRowsInsteadOfTheStream) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  Frictional two = make_model((Frictional*)nullptr);
+  two.tangential.table.p[1][1].mu_s = 0.3;  // no particle has species 1: the same forces
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
+  auto a = stirred_packing<TypeParam, Frictional>(prm, two);
+  auto b = stirred_packing<TypeParam, Frictional>(prm);
+  a.step(200);
+  b.step(200);
+  EXPECT_GT(a.near_list_use().reads, 0);
+  EXPECT_EQ(a.near_list_use().stream_reads, 0) << "the stream broadcasts one parameter set";
+  if (cpu_has_avx2()) {
+    EXPECT_GT(b.near_list_use().stream_reads, 0);
+  }
+  expect_same_bits(a, b, "near rows against the stream");
+}
+
+// A particle at rest with no partner: the integrator starts its force at -gamma_b * 0 = -0,
+// and the rows add its empty sum, +0, which makes it +0. The stream must add it too.
+TYPED_TEST(NearListTest, ARowWithoutNearEntriesAddsItsZeroSumInTheStreamAsInTheRows) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = 12.0;
+  HostParticles h;
+  h.resize(3);
+  const double at[3][3] = {{3, 3, 3}, {3.95, 3, 3}, {9, 9, 9}};  // a touching pair, one alone
+  for (int i = 0; i < 3; ++i) {
+    h.x[i] = at[i][0], h.y[i] = at[i][1], h.z[i] = at[i][2];
+    h.radius[i] = 0.5, h.density[i] = 2000;
+  }
+  h.vx[0] = 0.01, h.vx[1] = -0.01, h.vy[1] = 0.002, h.wz[0] = 0.01;
+  DemParams prm;
+  prm.dt = 0.001, prm.skin = 0.1, prm.damping.translational = 20;  // the pair stays in contact
+  prm.damping.rotational = 5;
+  DemParams rows = prm;
+  rows.near_stream = false;
+  const Frictional model = make_model((Frictional*)nullptr);
+  DemSystem<TypeParam, Frictional> a(Particles<TypeParam>::from_host(h), box, model, prm);
+  DemSystem<TypeParam, Frictional> b(Particles<TypeParam>::from_host(h), box, model, rows);
+  a.step(40);
+  b.step(40);
+  if (cpu_has_avx2()) {
+    ASSERT_GT(a.near_list_use().stream_reads, 0);
+  }
+  ASSERT_EQ(a.measure().contacts, 1);
+  const std::vector<double> v = host_copy<TypeParam>(a.particles().v);
+  const std::vector<double> f = host_copy<TypeParam>(a.particles().f);
+  const std::vector<double> q = host_copy<TypeParam>(a.particles().torque);
+  int alone = -1;
+  for (int i = 0; i < 3; ++i)
+    if (v[3 * i] == 0.0 && v[3 * i + 1] == 0.0 && v[3 * i + 2] == 0.0) alone = i;
+  ASSERT_GE(alone, 0);
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_FALSE(std::signbit(f[3 * alone + d])) << "force " << d << " " << f[3 * alone + d];
+    EXPECT_FALSE(std::signbit(q[3 * alone + d])) << "torque " << d << " " << q[3 * alone + d];
+  }
+  expect_same_bits(a, b, "stream against the batched near rows");
 }

@@ -1,11 +1,12 @@
-// What many tests share: their scratch paths and the text of shipped scene files. ctest
-// runs every test twice (1 and 2 threads), possibly at the same time under -j, so each
-// process gets its own scratch names, suffixed with its pid.
+// What many tests share: their scratch paths, the text of shipped scene files and a bitwise
+// comparison of arrays of doubles. ctest runs every test twice (1 and 2 threads), possibly at
+// the same time under -j, so each process gets its own scratch names, suffixed with its pid.
 #pragma once
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -70,6 +71,14 @@ inline void replace_once(std::string& text, const std::string& from, const std::
   const auto at = text.find(from);
   ASSERT_NE(at, std::string::npos) << from;
   text.replace(at, from.size(), to);
+}
+
+// Whether two arrays hold the same bits (operator== would take -0 for +0 and fail on NaN).
+inline bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+  // Empty vectors (no spins in frictionless models) may hold a null pointer, which memcmp
+  // must not receive even for zero bytes.
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
 }  // namespace granular::testing

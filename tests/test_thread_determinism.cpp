@@ -12,7 +12,6 @@
 // default host space with all the threads the test was started with (ctest: 1 and 2).
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <type_traits>
 #include <vector>
 
@@ -23,6 +22,7 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
+#include "test_support.hpp"
 
 using namespace granular;
 
@@ -96,12 +96,7 @@ Trace in_one_openmp_thread(const F& f) {
 }
 #endif
 
-bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
-  // Empty vectors (no spins in frictionless models) may hold a null pointer, which memcmp
-  // must not receive even for zero bytes.
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
-}
+using granular::testing::bitwise_equal;
 
 void expect_identical(const Trace& a, const Trace& b, const char* what) {
   EXPECT_TRUE(bitwise_equal(a.x, b.x)) << what << ": positions differ";

@@ -1,0 +1,229 @@
+// The near list as one flat stream of contacts per slab, for the host one-pass force kernel
+// with the batched frictional law (kernels/contact_forces.hpp, kernels/contact_batch.hpp).
+//
+// The batched rows split each owner row into its touching entries, copy the touching pairs'
+// positions, velocities, spins and springs into the batch's slots, evaluate them four at a
+// time and scatter the forces row by row: three loops per row whose lengths (0 to ~6
+// entries) the branch predictor cannot follow, and a copy of every input through memory.
+// While the near list is read, its entries do not change: a recording writes them once as
+// a stream (owner, partner, history row, in the slabs' row order), and the force passes that
+// read it take four consecutive entries at a time, whatever rows they belong to, gather
+// their inputs straight into AVX2 registers from the particle arrays, test the distance and
+// evaluate the law in the lanes, then scatter lane by lane in stream order. The sums are
+// formed in the batched rows' order (each contact's reaction when its row is reached, each
+// owner's own sum at its row's end), an apart entry forgets its spring as there, and every
+// lane performs the batched law's operations, so the results are bitwise those of the rows.
+//
+// Rows without near entries add their (zero) sum too: adding +0 to a chain of additions
+// changes its result only where the whole chain is -0, wherever in the chain it is added, so
+// these rows add it before the slab's stream is read.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <vector>
+
+#include "core/box.hpp"
+#include "kernels/contact_batch.hpp"
+#include "kernels/host_rows.hpp"
+
+#if GRANULAR_CONTACT_BATCH
+#include <immintrin.h>
+#endif
+
+namespace granular {
+
+// The stream of one recording of the near list: entry e joins owner i[e] with partner j[e],
+// history row r[e]; slab s's entries are begin[s] .. begin[s + 1] - 1 and its rows without a
+// near entry are empty[empty_begin[s]] .. empty[empty_begin[s + 1] - 1]. Four entries of
+// valid indices follow the last one (gathered by the last vector, never scattered).
+struct NearStream {
+  std::vector<int> i, j, r, begin, empty, empty_begin;
+  // Whether the last force pass recorded it (the next ones may read it).
+  bool ready = false;
+  long reads = 0;  // force passes that read it
+};
+
+// Whether 3 * index stays an int for every history row and particle (the gathers' offsets).
+inline bool near_stream_indexable(long rows, long particles) {
+  return 3 * rows < 2147483647L && 3 * particles < 2147483647L;
+}
+
+#if GRANULAR_CONTACT_BATCH
+
+// Whether the stream can serve this model instance on this processor: the batched law
+// with one parameter set (broadcast; the lanes gather no per-pair parameters) and gathers.
+template <class Model>
+bool near_stream_usable(const Model& m) {
+  if constexpr (ContactBatchLaw<Model>::available)
+    return cpu_has_avx2() && ContactBatchLaw<Model>::usable(m) &&
+           ContactBatchLaw<Model>::uniform(m);
+  else
+    return false;
+}
+
+// Writes the stream of the near list just recorded (nr) for the slabs of `list`.
+template <class ExecSpace>
+void record_near_stream(NearStream& st, const HostListRows& list, const HostArray<const int>& order,
+                        const HostArray<const int>& slab_begin, int slabs, const NearRows& nr) {
+  using Policy = Kokkos::RangePolicy<ExecSpace>;
+  st.begin.assign(slabs + 1, 0);
+  st.empty_begin.assign(slabs + 1, 0);
+  int* const sb = st.begin.data();
+  int* const eb = st.empty_begin.data();
+  Kokkos::parallel_for("dem::near_stream::count", Policy(0, slabs), [=](const int s) {
+    int entries = 0, empty = 0;
+    for (int q = slab_begin(s); q < slab_begin(s + 1); ++q) {
+      const int c = nr.count[order(q)];
+      entries += c;
+      empty += c == 0;
+    }
+    sb[s + 1] = entries, eb[s + 1] = empty;
+  });
+  for (int s = 0; s < slabs; ++s) sb[s + 1] += sb[s], eb[s + 1] += eb[s];
+  const size_t total = static_cast<size_t>(sb[slabs]) + ContactBatch::kW;
+  if (st.i.size() < total) {  // grown with room to spare: recordings come every few steps
+    const size_t room = total + total / 8;
+    st.i.resize(room), st.j.resize(room), st.r.resize(room);
+  }
+  st.empty.resize(static_cast<size_t>(eb[slabs]));
+  int* const si = st.i.data();
+  int* const sj = st.j.data();
+  int* const sr = st.r.data();
+  int* const se = st.empty.data();
+  Kokkos::parallel_for("dem::near_stream::record", Policy(0, slabs), [=](const int s) {
+    int e = sb[s], z = eb[s];
+    for (int q = slab_begin(s); q < slab_begin(s + 1); ++q) {
+      const int i = order(q), pb = list.pair_begin(i), row0 = pb - list.offsets(i);
+      const int c = nr.count[i];
+      if (c == 0) se[z++] = i;
+      for (int a = pb; a < pb + c; ++a, ++e) {
+        const int k = nr.k[a];
+        si[e] = i, sj[e] = list.neighbors(k), sr[e] = row0 + k;
+      }
+    }
+  });
+  // The padding: the first entry's indices (valid particles and history rows; never read
+  // where there is no entry at all).
+  for (int e = sb[slabs]; e < sb[slabs] + ContactBatch::kW; ++e)
+    si[e] = sb[slabs] > 0 ? si[0] : 0, sj[e] = sb[slabs] > 0 ? sj[0] : 0, sr[e] = 0;
+  st.ready = true;
+}
+
+namespace near_stream_detail {
+using V = ContactBatch::V;
+using M = ContactBatch::M;
+
+// base[idx] per lane. (The masked form with a zero source: the plain intrinsic's undefined
+// source draws a false uninitialised-use warning from GCC 12.)
+GRANULAR_AVX2_INLINE V gather1(const double* base, __m128i idx) {
+  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  return (V)_mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, idx, all, 8);
+}
+// Field d of the 3-vectors at offsets idx3 = 3 * index.
+GRANULAR_AVX2_INLINE V gather3(const double* base, __m128i idx3, int d) {
+  return gather1(base + d, idx3);
+}
+GRANULAR_AVX2_INLINE __m128i times3(__m128i a) { return _mm_add_epi32(_mm_add_epi32(a, a), a); }
+// min_image_of on four lanes: the same comparisons and the same one addition per lane.
+GRANULAR_AVX2_INLINE V min_image4(V dx, double l, bool periodic) {
+  if (!periodic) return dx;
+  const V len = ContactBatch::splat(l), hl = ContactBatch::splat(0.5 * l);
+  const V down = dx - len, up = dx + len;
+  return ContactBatch::sel(dx > hl, down, ContactBatch::sel(dx < -hl, up, dx));
+}
+}  // namespace near_stream_detail
+
+// The stream entries e0 .. e1 - 1 (one slab) and the slab's rows without near entries
+// (empty[z0 .. z1 - 1]) with every pair's parameters (pn, pt): the forces, torques and
+// springs of the batched rows, bitwise.
+GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const PeriodicBox& b,
+                                           const LinearNormal::Params& pn,
+                                           const CoulombTangential::Params& pt, const int* si,
+                                           const int* sj, const int* sr, int e0, int e1,
+                                           const int* empty, int z0, int z1, double* hist,
+                                           const HostVec3& fh, const HostVec3& qh,
+                                           const double rate[3], double dt) {
+  using namespace near_stream_detail;
+  using CB = ContactBatch;
+  constexpr int H = 3;
+  for (int z = z0; z < z1; ++z)  // a row's empty sum: +0 (see the head of this file)
+    for (int d = 0; d < 3; ++d) fh(empty[z], d) += 0.0, qh(empty[z], d) += 0.0;
+  const double* const x = &hv.x(0, 0);
+  const double* const v = &hv.v(0, 0);
+  const double* const w = &hv.w(0, 0);
+  const double* const rad = &hv.radius(0);
+  const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
+  const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
+  const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
+  const V vdt = CB::splat(dt);
+  const CB::LaneParams par{CB::splat(pn.kn), CB::splat(pn.gn),   CB::splat(pt.kt),
+                           CB::splat(pt.gt), CB::splat(pt.mu_s), CB::splat(pt.mu_d)};
+  int cur = -1;  // the owner whose row is being summed
+  double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
+  alignas(32) double out[12][CB::kW];
+  for (int e = e0; e < e1; e += CB::kW) {
+    const int valid = e1 - e < CB::kW ? e1 - e : CB::kW;
+    const __m128i I = _mm_loadu_si128(reinterpret_cast<const __m128i*>(si + e));
+    const __m128i J = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sj + e));
+    const __m128i I3 = times3(I), J3 = times3(J);
+    for (int l = 0; l < valid; ++l) {  // the scatter's lines, requested while the lanes work
+      __builtin_prefetch(&fh(sj[e + l], 0), 1);
+      __builtin_prefetch(&qh(sj[e + l], 0), 1);
+    }
+    CB::Lanes c;
+    c.X = min_image4(gather3(x, I3, 0) - gather3(x, J3, 0), lx, px);
+    c.Y = min_image4(gather3(x, I3, 1) - gather3(x, J3, 1), ly, py);
+    c.Z = min_image4(gather3(x, I3, 2) - gather3(x, J3, 2), lz, pz);
+    c.ai = gather1(rad, I), c.aj = gather1(rad, J);
+    // split_row's test: touching() operation for operation.
+    const V sum = c.ai + c.aj;
+    const V r2 = c.X * c.X + c.Y * c.Y + c.Z * c.Z;
+    const int touching = CB::lanes((M)(r2 < sum * sum)) & ((1 << valid) - 1);
+    if (touching) {
+      const __m128i R3 = times3(_mm_loadu_si128(reinterpret_cast<const __m128i*>(sr + e)));
+      c.d0 = gather3(v, I3, 0) - gather3(v, J3, 0) + r30 * c.X;  // as set_motion
+      c.d1 = gather3(v, I3, 1) - gather3(v, J3, 1) + r31 * c.Y;
+      c.d2 = gather3(v, I3, 2) - gather3(v, J3, 2) + r32 * c.Z;
+      c.wi0 = gather3(w, I3, 0), c.wi1 = gather3(w, I3, 1), c.wi2 = gather3(w, I3, 2);
+      c.wj0 = gather3(w, J3, 0), c.wj1 = gather3(w, J3, 1), c.wj2 = gather3(w, J3, 2);
+      c.s0 = gather3(hist, R3, 0), c.s1 = gather3(hist, R3, 1), c.s2 = gather3(hist, R3, 2);
+      CB::law(c, par, vdt);
+      const V res[12] = {c.F0, c.F1, c.F2, c.q0, c.q1, c.q2, c.p0, c.p1, c.p2, c.s0, c.s1, c.s2};
+      for (int o = 0; o < 12; ++o) CB::store(out[o], res[o]);
+    }
+    for (int l = 0; l < valid; ++l) {
+      const int i = si[e + l];
+      if (i != cur) {  // the previous row ends: its owner's own sum
+        if (cur >= 0) {
+          for (int d = 0; d < 3; ++d) fh(cur, d) += fi[d];
+          for (int d = 0; d < 3; ++d) qh(cur, d) += qi[d];
+        }
+        cur = i;
+        for (int d = 0; d < 3; ++d) fi[d] = 0.0, qi[d] = 0.0;
+      }
+      const int r = sr[e + l];
+      if (!(touching >> l & 1)) {
+        forget_history<H>(hist, r);
+        continue;
+      }
+      const int j = sj[e + l];
+      for (int d = 0; d < 3; ++d) {  // the batched rows' flush, contact by contact
+        fi[d] += out[d][l];
+        fh(j, d) -= out[d][l];
+      }
+      for (int d = 0; d < 3; ++d) {
+        qi[d] += out[3 + d][l];
+        qh(j, d) += out[6 + d][l];
+      }
+      double* h = hist + r * H;
+      h[0] = out[9][l], h[1] = out[10][l], h[2] = out[11][l];
+    }
+  }
+  if (cur >= 0) {
+    for (int d = 0; d < 3; ++d) fh(cur, d) += fi[d];
+    for (int d = 0; d < 3; ++d) qh(cur, d) += qi[d];
+  }
+}
+
+#endif  // GRANULAR_CONTACT_BATCH
+
+}  // namespace granular
