@@ -73,8 +73,8 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
 struct ContactBatch {
   static constexpr int kCap = 64;  // contacts; a row with more owned entries goes scalar
   static constexpr int kW = 4;     // lanes per vector: one AVX register
-  using V = double __attribute__((vector_size(32)));
-  using M = long __attribute__((vector_size(32)));
+  using V = simd4::V;
+  using M = simd4::M;
 
   int n = 0, rows = 0;
   // One parameter set for every pair (a single species, or equal tables): the parameters are
@@ -99,13 +99,9 @@ struct ContactBatch {
   alignas(32) double q0[kCap + kW], q1[kCap + kW], q2[kCap + kW];
   alignas(32) double p0[kCap + kW], p1[kCap + kW], p2[kCap + kW];
 
-  GRANULAR_AVX_INLINE static V load(const double* a) {
-    V v;
-    std::memcpy(&v, a, sizeof v);
-    return v;
-  }
-  GRANULAR_AVX_INLINE static void store(double* a, V v) { std::memcpy(a, &v, sizeof v); }
-  GRANULAR_AVX_INLINE static V splat(double x) { return V{x, x, x, x}; }
+  GRANULAR_AVX_INLINE static V load(const double* a) { return simd4::load(a); }
+  GRANULAR_AVX_INLINE static void store(double* a, V v) { simd4::store(a, v); }
+  GRANULAR_AVX_INLINE static V splat(double x) { return simd4::splat(x); }
   GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return m ? a : b; }
   // Whether any / every lane of a comparison holds. The square roots and divisions of the
   // rare branches (a spring far out of the tangent plane, a sliding contact) are the slowest

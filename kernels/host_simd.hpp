@@ -4,6 +4,7 @@
 // the neighbour build's candidate sweep (kernels/neighbor_sweep.hpp) and the near stream
 // (kernels/near_stream.hpp).
 #pragma once
+#include <cstring>
 
 #if defined(__GNUC__) && !defined(__CUDACC__) && !defined(__clang__) && defined(__x86_64__)
 #define GRANULAR_HOST_AVX 1
@@ -18,6 +19,22 @@
 #endif
 
 namespace granular {
+
+#if GRANULAR_HOST_AVX
+// Four doubles in one AVX register (GCC vector extensions), a comparison's lane masks, and
+// the plain loads and stores of four consecutive doubles.
+namespace simd4 {
+using V = double __attribute__((vector_size(32)));
+using M = long __attribute__((vector_size(32)));
+GRANULAR_AVX_INLINE V load(const double* a) {
+  V v;
+  std::memcpy(&v, a, sizeof v);
+  return v;
+}
+GRANULAR_AVX_INLINE void store(double* a, V v) { std::memcpy(a, &v, sizeof v); }
+GRANULAR_AVX_INLINE V splat(double x) { return V{x, x, x, x}; }
+}  // namespace simd4
+#endif
 
 // Whether this processor (and its operating system) runs AVX instructions (false where no
 // AVX code is compiled).

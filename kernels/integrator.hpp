@@ -39,6 +39,19 @@ struct KickDriftRows {
   bool pending;
   DampingStart damp;
 
+  // One component's kicks: the deferred closing half kick of the previous step (pend), this
+  // step's opening one, and the next force sum started with the new velocity (start, mg =
+  // -gamma). Returns the new velocity.
+  KOKKOS_FORCEINLINE_FUNCTION static double kicks(double& vel, double& force, double h, bool pend,
+                                                  bool start, double mg) {
+    const double fd = force;
+    const double v0 = pend ? vel + h * fd : vel;
+    const double vd = v0 + h * fd;
+    vel = vd;
+    if (start) force = mg * vd;
+    return vd;
+  }
+
   // `Speed`: the block's largest squared drift velocity also goes to max_v2 (NaN if any).
   template <bool Rotations, bool Speed>
   double run(int i0, int i1, double& max_v2) const {
@@ -62,11 +75,7 @@ struct KickDriftRows {
       const double h = 0.5 * step / ms[i];
       double d2 = 0.0, v2 = 0.0;
       for (int d = 0; d < 3; ++d) {
-        const double fd = fs[3 * i + d];
-        const double v0 = pend ? vs[3 * i + d] + h * fd : vs[3 * i + d];
-        const double vd = v0 + h * fd;
-        vs[3 * i + d] = vd;
-        if (start) fs[3 * i + d] = -gb * vd;
+        const double vd = kicks(vs[3 * i + d], fs[3 * i + d], h, pend, start, -gb);
         double xd = xs[3 * i + d] + step * vd;
         if (per[d]) {  // PeriodicBox::wrap
           if (xd >= lo[d] + len[d])
@@ -87,13 +96,7 @@ struct KickDriftRows {
       }
       if (Rotations) {
         const double hr = 0.5 * step / is[i];
-        for (int d = 0; d < 3; ++d) {
-          const double qd = qs[3 * i + d];
-          const double w0 = pend ? ws[3 * i + d] + hr * qd : ws[3 * i + d];
-          const double wd = w0 + hr * qd;
-          ws[3 * i + d] = wd;
-          if (start) qs[3 * i + d] = -gr * wd;
-        }
+        for (int d = 0; d < 3; ++d) kicks(ws[3 * i + d], qs[3 * i + d], hr, pend, start, -gr);
       }
       m = d2 > m ? d2 : m;
       // NaN counts as a move beyond any skin here: the near list is then recorded again.
@@ -108,15 +111,18 @@ struct KickDriftRows {
   // has AVX2: the same operations per component, branches replaced by selecting between both
   // outcomes, the squared sums per particle in run()'s order, so the same bits; the particles
   // after the last whole four go through run().
-  using V4 = double __attribute__((vector_size(32)));
-  using M4 = long __attribute__((vector_size(32)));
-  GRANULAR_AVX2_INLINE static V4 load(const double* a) {
-    V4 r;
-    std::memcpy(&r, a, sizeof r);
-    return r;
+  using V4 = simd4::V;
+  using M4 = simd4::M;
+  // kicks() on four components at vel and force.
+  GRANULAR_AVX2_INLINE static V4 kicks4(double* vel, double* force, V4 h, bool pend, bool start,
+                                        V4 mg) {
+    const V4 fd = simd4::load(force), v_old = simd4::load(vel);
+    const V4 v0 = pend ? v_old + h * fd : v_old;
+    const V4 vd = v0 + h * fd;
+    simd4::store(vel, vd);
+    if (start) simd4::store(force, mg * vd);
+    return vd;
   }
-  GRANULAR_AVX2_INLINE static void store(double* a, V4 r) { std::memcpy(a, &r, sizeof r); }
-  GRANULAR_AVX2_INLINE static V4 splat(double a) { return V4{a, a, a, a}; }
   // Per-particle values of four particles spread over their twelve components (part k of 3).
   GRANULAR_AVX2_INLINE static V4 spread(V4 a, int k) {
     using I4 = long __attribute__((vector_size(32)));
@@ -138,40 +144,32 @@ struct KickDriftRows {
         half4[k][c] = 0.5 * box.len[d];
         per4[k][c] = box.periodic[d] ? -1 : 0;
       }
-    const V4 half_step = splat(0.5 * step), vstep = splat(step);
-    const V4 mgb = splat(-damp.translational), mgr = splat(-damp.rotational);
+    const V4 half_step = simd4::splat(0.5 * step), vstep = simd4::splat(step);
+    const V4 mgb = simd4::splat(-damp.translational), mgr = simd4::splat(-damp.rotational);
     double m = Kokkos::reduction_identity<double>::max();
     double mv = max_v2;
     int i = i0;
     for (; i + 4 <= i1; i += 4) {
-      const V4 h4 = half_step / load(mass + i);
+      const V4 h4 = half_step / simd4::load(mass + i);
       alignas(32) double uu[12], vv[12];
       for (int k = 0; k < 3; ++k) {
         const int o = 3 * i + 4 * k;
-        const V4 h = spread(h4, k), fd = load(f + o), v_old = load(v + o);
-        const V4 v0 = pend ? v_old + h * fd : v_old;
-        const V4 vd = v0 + h * fd;
-        store(v + o, vd);
-        if (start) store(f + o, mgb * vd);
-        V4 xd = load(x + o) + vstep * vd;
+        const V4 vd = kicks4(v + o, f + o, spread(h4, k), pend, start, mgb);
+        V4 xd = simd4::load(x + o) + vstep * vd;
         const M4 above = per4[k] & (xd >= hi[k]), below = per4[k] & (xd < lo4[k]);
         xd = above ? xd - len4[k] : (below ? xd + len4[k] : xd);  // PeriodicBox::wrap
-        store(x + o, xd);
-        V4 u = xd - load(x_ref + o);
+        simd4::store(x + o, xd);
+        V4 u = xd - simd4::load(x_ref + o);
         const M4 far = per4[k] & (u > half4[k]), near = per4[k] & (u < -half4[k]);
         u = far ? u - len4[k] : (near ? u + len4[k] : u);  // PeriodicBox::min_image
-        store(uu + 4 * k, u * u);
-        if (Speed) store(vv + 4 * k, vd * vd);
+        simd4::store(uu + 4 * k, u * u);
+        if (Speed) simd4::store(vv + 4 * k, vd * vd);
       }
       if (Rotations) {
-        const V4 hr4 = half_step / load(inertia + i);
+        const V4 hr4 = half_step / simd4::load(inertia + i);
         for (int k = 0; k < 3; ++k) {
           const int o = 3 * i + 4 * k;
-          const V4 hr = spread(hr4, k), qd = load(q + o), w_old = load(w + o);
-          const V4 w0 = pend ? w_old + hr * qd : w_old;
-          const V4 wd = w0 + hr * qd;
-          store(w + o, wd);
-          if (start) store(q + o, mgr * wd);
+          kicks4(w + o, q + o, spread(hr4, k), pend, start, mgr);
         }
       }
       for (int p = 0; p < 4; ++p) {

@@ -101,8 +101,8 @@ void record_near_stream(NearStream& st, const HostListRows& list, const HostArra
       }
     }
   });
-  // The padding: the first entry's indices (valid particles and history rows; never read
-  // where there is no entry at all).
+  // The padding: the first entry's particles and history row 0 (valid indices wherever there
+  // is an entry; with none, no vector is read).
   for (int e = sb[slabs]; e < sb[slabs] + ContactBatch::kW; ++e)
     si[e] = sb[slabs] > 0 ? si[0] : 0, sj[e] = sb[slabs] > 0 ? sj[0] : 0, sr[e] = 0;
   st.ready = true;

@@ -83,11 +83,17 @@ void expect_same_bits(DemSystem<Exec, Model>& a, DemSystem<Exec, Model>& b, cons
   }
 }
 
-template <class Exec, class Model>
-void compare_with_whole_rows(bool batched) {
+// The run parameters of the comparisons below.
+DemParams stirred_params() {
   DemParams prm;
   prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
   prm.damping.rotational = 5;
+  return prm;
+}
+
+template <class Exec, class Model>
+void compare_with_whole_rows(bool batched) {
+  DemParams prm = stirred_params();
   prm.batched_contacts = batched;
   DemParams whole = prm, fine = prm;
   whole.near_skin = 0.0;   // no near list: every pass reads the whole rows
@@ -123,9 +129,7 @@ void compare_with_whole_rows(bool batched) {
 // The stream against the batched near rows (stream off) and whole rows (no near list).
 template <class Exec>
 void compare_stream_with_rows(double near_skin) {
-  DemParams prm;
-  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
-  prm.damping.rotational = 5;
+  DemParams prm = stirred_params();
   prm.near_skin = near_skin;
   DemParams rows = prm, whole = prm;
   rows.near_stream = false;
@@ -185,8 +189,7 @@ TYPED_TEST(NearListTest, LawsWithSeveralParameterSetsReadTheNearRowsInsteadOfThe
   if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
   Frictional two = make_model((Frictional*)nullptr);
   two.tangential.table.p[1][1].mu_s = 0.3;  // no particle has species 1: the same forces
-  DemParams prm;
-  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 20;
+  const DemParams prm = stirred_params();
   auto a = stirred_packing<TypeParam, Frictional>(prm, two);
   auto b = stirred_packing<TypeParam, Frictional>(prm);
   a.step(200);
