@@ -213,8 +213,11 @@ struct ContactBatch {
     }
   }
 
-  // The law on one vector of contacts (also the near stream's, kernels/near_stream.hpp).
-  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt) {
+  // The law on one vector of contacts (also the near stream's, kernels/near_stream.hpp). The
+  // rare branches are taken only where a lane in `active` needs them: the other lanes (apart
+  // pairs of the stream) are not used, and must not send a vector down a branch.
+  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt,
+                                      M active = M{-1, -1, -1, -1}) {
     const V one = splat(1.0), zero = splat(0.0), half = splat(0.5);
     const V X = l.X, Y = l.Y, Z = l.Z;
     const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
@@ -241,7 +244,7 @@ struct ContactBatch {
     const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
     const M small = x < splat(1e-4);
     V scale = taylor;
-    if (!all(small)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
+    if (!all(small | ~active)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
     s0 = sel(empty, s0, (s0 - sn * n0) * scale);
     s1 = sel(empty, s1, (s1 - sn * n1) * scale);
     s2 = sel(empty, s2, (s2 - sn * n2) * scale);
@@ -253,7 +256,7 @@ struct ContactBatch {
     const V afn = sel(fn < zero, -fn, fn);
     const V limit = p.mus * afn;
     const M slides = f_sq > limit * limit;
-    if (any(slides)) {
+    if (any(slides & active)) {
       const V fmag = vsqrt(f_sq);
       const V slide = p.mud * afn;
       const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);

@@ -48,8 +48,10 @@ struct DemParams {
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
   // the owned entries within this gap of touching, read instead of the whole rows while no
-  // particle has moved half of it (the same bits either way). < 0: a quarter of `skin`;
-  // 0: no near list. Used in runs of at least kNearMinSteps steps without strain.
+  // particle has moved half of it (the same bits either way). < 0: a sixteenth of `skin`
+  // (perf/README.md, design note: thinner gaps record more often, which costs about a pass
+  // over the whole rows, and save the apart entries of every other pass); 0: no near list.
+  // Used in runs of at least kNearMinSteps steps without strain.
   double near_skin = -1.0;
   // Host one-pass kernel, batched law with one parameter set: the near list also recorded as
   // a flat stream of contacts and read four at a time (kernels/near_stream.hpp; the same
@@ -410,7 +412,7 @@ class DemSystem {
   // Runs shorter than this record the list more often than they read it.
   static constexpr long kNearMinSteps = 16;
   double near_skin() const {
-    return params_.near_skin < 0 ? 0.25 * params_.skin : params_.near_skin;
+    return params_.near_skin < 0 ? params_.skin / 16 : params_.near_skin;
   }
   // A straining box moves every pair affinely (the list's skin test knows; the near list's
   // does not): no near list there.

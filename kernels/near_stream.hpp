@@ -7,8 +7,8 @@
 // entries) the branch predictor cannot follow, and a copy of every input through memory.
 // While the near list is read, its entries do not change: a recording writes them once as
 // a stream (owner, partner, history row, in the slabs' row order), and the force passes that
-// read it take four consecutive entries at a time, whatever rows they belong to, gather
-// their inputs straight into AVX2 registers from the particle arrays, test the distance and
+// read it take four consecutive entries at a time, whatever rows they belong to, load
+// their inputs straight into AVX registers from the particle arrays, test the distance and
 // evaluate the law in the lanes, then scatter lane by lane in stream order. The sums are
 // formed in the batched rows' order (each contact's reaction when its row is reached, each
 // owner's own sum at its row's end), an apart entry forgets its spring as there, and every
@@ -42,7 +42,7 @@ struct NearStream {
   long reads = 0;  // force passes that read it
 };
 
-// Whether 3 * index stays an int for every history row and particle (the gathers' offsets).
+// Whether 3 * index stays an int for every history row and particle (the loads' offsets).
 inline bool near_stream_indexable(long rows, long particles) {
   return 3 * rows < 2147483647L && 3 * particles < 2147483647L;
 }
@@ -50,7 +50,7 @@ inline bool near_stream_indexable(long rows, long particles) {
 #if GRANULAR_CONTACT_BATCH
 
 // Whether the stream can serve this model instance on this processor: the batched law
-// with one parameter set (broadcast; the lanes gather no per-pair parameters) and gathers.
+// with one parameter set (broadcast; the lanes load no per-pair parameters), AVX2.
 template <class Model>
 bool near_stream_usable(const Model& m) {
   if constexpr (ContactBatchLaw<Model>::available)
@@ -112,17 +112,31 @@ namespace near_stream_detail {
 using V = ContactBatch::V;
 using M = ContactBatch::M;
 
-// base[idx] per lane. (The masked form with a zero source: the plain intrinsic's undefined
-// source draws a false uninitialised-use warning from GCC 12.)
-GRANULAR_AVX2_INLINE V gather1(const double* base, __m128i idx) {
-  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-  return (V)_mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, idx, all, 8);
+// The 3-vectors base[3 k .. 3 k + 2] of the four particles (or history rows) k = idx[0..3],
+// as three vectors of four lanes: two 16-byte loads of (x, y) joined into one register per
+// pair of lanes, unpacked into x and y, and the four z joined alike. 1.02-1.04x against
+// three gathers (perf/README.md, design note), the same values.
+GRANULAR_AVX2_INLINE void load3(const double* base, const int* idx, V& X, V& Y, V& Z) {
+  const double* const p0 = base + 3 * idx[0];
+  const double* const p1 = base + 3 * idx[1];
+  const double* const p2 = base + 3 * idx[2];
+  const double* const p3 = base + 3 * idx[3];
+  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2),
+                                         1);  // x0 y0 x2 y2
+  const __m256d c = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3),
+                                         1);  // x1 y1 x3 y3
+  X = (V)_mm256_unpacklo_pd(a, c);
+  Y = (V)_mm256_unpackhi_pd(a, c);
+  const __m128d z01 = _mm_loadh_pd(_mm_load_sd(p0 + 2), p1 + 2);
+  const __m128d z23 = _mm_loadh_pd(_mm_load_sd(p2 + 2), p3 + 2);
+  Z = (V)_mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1);
 }
-// Field d of the 3-vectors at offsets idx3 = 3 * index.
-GRANULAR_AVX2_INLINE V gather3(const double* base, __m128i idx3, int d) {
-  return gather1(base + d, idx3);
+// base[k] of the four indices k = idx[0..3].
+GRANULAR_AVX2_INLINE V load1(const double* base, const int* idx) {
+  const __m128d a01 = _mm_loadh_pd(_mm_load_sd(base + idx[0]), base + idx[1]);
+  const __m128d a23 = _mm_loadh_pd(_mm_load_sd(base + idx[2]), base + idx[3]);
+  return (V)_mm256_insertf128_pd(_mm256_castpd128_pd256(a01), a23, 1);
 }
-GRANULAR_AVX2_INLINE __m128i times3(__m128i a) { return _mm_add_epi32(_mm_add_epi32(a, a), a); }
 // min_image_of on four lanes: the same comparisons and the same one addition per lane.
 GRANULAR_AVX2_INLINE V min_image4(V dx, double l, bool periodic) {
   if (!periodic) return dx;
@@ -163,9 +177,6 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   alignas(32) double out[12][CB::kW];
   for (int e = e0; e < e1; e += CB::kW) {
     const int valid = e1 - e < CB::kW ? e1 - e : CB::kW;
-    const __m128i I = _mm_loadu_si128(reinterpret_cast<const __m128i*>(si + e));
-    const __m128i J = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sj + e));
-    const __m128i I3 = times3(I), J3 = times3(J);
     // The partners of the entries 16 ahead (four vectors): their lines are requested now, so
     // that their misses overlap this vector's work instead of stalling its gathers and its
     // scatter (1.02-1.04x against requesting the scatter's lines of this vector only).
@@ -178,24 +189,28 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
         __builtin_prefetch(&fh(ja, 0), 1);
         __builtin_prefetch(&qh(ja, 0), 1);
       }
+    const int *const ii = si + e, *const jj = sj + e;
     CB::Lanes c;
-    c.X = min_image4(gather3(x, I3, 0) - gather3(x, J3, 0), lx, px);
-    c.Y = min_image4(gather3(x, I3, 1) - gather3(x, J3, 1), ly, py);
-    c.Z = min_image4(gather3(x, I3, 2) - gather3(x, J3, 2), lz, pz);
-    c.ai = gather1(rad, I), c.aj = gather1(rad, J);
+    V xi0, xi1, xi2, xj0, xj1, xj2;
+    load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
+    c.X = min_image4(xi0 - xj0, lx, px);
+    c.Y = min_image4(xi1 - xj1, ly, py);
+    c.Z = min_image4(xi2 - xj2, lz, pz);
+    c.ai = load1(rad, ii), c.aj = load1(rad, jj);
     // split_row's test: touching() operation for operation.
     const V sum = c.ai + c.aj;
     const V r2 = c.X * c.X + c.Y * c.Y + c.Z * c.Z;
-    const int touching = CB::lanes((M)(r2 < sum * sum)) & ((1 << valid) - 1);
+    const M touch = (M)(r2 < sum * sum) & (M{0, 1, 2, 3} < valid);
+    const int touching = CB::lanes(touch);
     if (touching) {
-      const __m128i R3 = times3(_mm_loadu_si128(reinterpret_cast<const __m128i*>(sr + e)));
-      c.d0 = gather3(v, I3, 0) - gather3(v, J3, 0) + r30 * c.X;  // as set_motion
-      c.d1 = gather3(v, I3, 1) - gather3(v, J3, 1) + r31 * c.Y;
-      c.d2 = gather3(v, I3, 2) - gather3(v, J3, 2) + r32 * c.Z;
-      c.wi0 = gather3(w, I3, 0), c.wi1 = gather3(w, I3, 1), c.wi2 = gather3(w, I3, 2);
-      c.wj0 = gather3(w, J3, 0), c.wj1 = gather3(w, J3, 1), c.wj2 = gather3(w, J3, 2);
-      c.s0 = gather3(hist, R3, 0), c.s1 = gather3(hist, R3, 1), c.s2 = gather3(hist, R3, 2);
-      CB::law(c, par, vdt);
+      V vi0, vi1, vi2, vj0, vj1, vj2;
+      load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
+      c.d0 = vi0 - vj0 + r30 * c.X;  // as set_motion
+      c.d1 = vi1 - vj1 + r31 * c.Y;
+      c.d2 = vi2 - vj2 + r32 * c.Z;
+      load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
+      load3(hist, sr + e, c.s0, c.s1, c.s2);
+      CB::law(c, par, vdt, touch);
       const V res[12] = {c.F0, c.F1, c.F2, c.q0, c.q1, c.q2, c.p0, c.p1, c.p2, c.s0, c.s1, c.s2};
       for (int o = 0; o < 12; ++o) CB::store(out[o], res[o]);
     }

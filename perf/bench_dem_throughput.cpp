@@ -5,17 +5,19 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--near-skin S] [--alternate batch|near|stream [--block B]]
+//                        [--near-skin S] [--alternate batch|near|stream|skin [--block B]]
+//                        [--skin-b S]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
-// --near-skin S: the force pass's near list (DemParams::near_skin: < 0 a quarter of the skin,
+// --near-skin S: the force pass's near list (DemParams::near_skin: < 0 a sixteenth of the skin,
 // the default; 0 none; the same bits for any value).
 // --alternate batch|near|stream [--block B]: after the timed run, steps the same trajectory in
 // blocks of B steps (default 100) with the batch (the near list, the near list's stream)
 // switched on and off in turn and reports the ratio of the two rates (median over the pairs of
 // blocks): an A/B comparison whose two sides share the machine's slow phases, for changes
-// smaller than the spread between runs.
+// smaller than the spread between runs. --alternate skin alternates the near skin between
+// --near-skin (A) and --skin-b (B).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -108,7 +110,7 @@ int main(int argc, char** argv) {
     bool triad = true, batched = true, per_particle = false;
     std::string alternate;
     long block = 100;
-    double near_skin = DemParams{}.near_skin;
+    double near_skin = DemParams{}.near_skin, skin_b = 0.0;
     int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
@@ -141,6 +143,8 @@ int main(int argc, char** argv) {
         alternate = next();
       else if (a == "--near-skin")
         near_skin = std::stod(next());
+      else if (a == "--skin-b")
+        skin_b = std::stod(next());
       else if (a == "--block")
         block = std::stol(next());
       else if (a == "--thread-per-particle")
@@ -155,8 +159,8 @@ int main(int argc, char** argv) {
       }
     }
     if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
-        alternate != "stream") {
-      std::cerr << "--alternate takes batch, near or stream, not " << alternate << "\n";
+        alternate != "stream" && alternate != "skin") {
+      std::cerr << "--alternate takes batch, near, stream or skin, not " << alternate << "\n";
       return 2;
     }
     if (block < 1) {
@@ -263,6 +267,8 @@ int main(int argc, char** argv) {
                     sys.set_batched_contacts(on);
                   else if (alternate == "stream")
                     sys.set_near_stream(on);
+                  else if (alternate == "skin")
+                    sys.set_near_skin(on ? near_skin : skin_b);
                   else
                     sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
@@ -354,6 +360,8 @@ int main(int argc, char** argv) {
           if (!alternated.empty()) {
             row["alternated"] = alternate;
             row["alternated_block_steps"] = block;
+            if (alternate == "skin")
+              row["alternated_near_skins_a_b"] = std::vector<double>{near_skin, skin_b};
             row["alternated_on_off_rate_ratio_per_rep"] = alternated;
           }
           row["bytes_per_particle_step"] = bytes;
