@@ -178,7 +178,7 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   for (int e = e0; e < e1; e += CB::kW) {
     const int valid = e1 - e < CB::kW ? e1 - e : CB::kW;
     // The partners of the entries 16 ahead (four vectors): their lines are requested now, so
-    // that their misses overlap this vector's work instead of stalling its gathers and its
+    // that their misses overlap this vector's work instead of stalling its loads and its
     // scatter (1.02-1.04x against requesting the scatter's lines of this vector only).
     if (e + kAhead + CB::kW <= e1)
       for (int l = 0; l < CB::kW; ++l) {

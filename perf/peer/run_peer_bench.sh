@@ -150,8 +150,11 @@ run_lammps() {  # model n ranks rep
   if [ "$3" = 1 ]; then
     OMP_NUM_THREADS=1 "${prio[@]}" /usr/bin/time -f "$timefmt" lmp "${args[@]}" > "$out" 2>&1 || say "FAILED: $out"
   else
-    OMP_NUM_THREADS=1 "${prio[@]}" "${mpirun_cmd[@]}" "$3" /usr/bin/time -f "$timefmt" lmp "${args[@]}" \
-      > "$out" 2>&1 || say "FAILED: $out"
+    # Each rank appends its own line to a file of its own (two ranks printing to one stream
+    # at exit could interleave their lines and lose a figure).
+    rm -f "$out.rss"
+    OMP_NUM_THREADS=1 "${prio[@]}" "${mpirun_cmd[@]}" "$3" /usr/bin/time -a -o "$out.rss" \
+      -f "$timefmt" lmp "${args[@]}" > "$out" 2>&1 || say "FAILED: $out"
   fi
   say "$(date -u +%T) lammps $1 N=$2 ranks=$3 rep=$4: $(grep -A40 PEER_TIMED_BEGIN "$out" | grep -m1 -o 'Loop time of [0-9.e+-]*' || echo '?')"
 }

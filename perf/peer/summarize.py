@@ -99,7 +99,10 @@ for path in sorted(sum((glob.glob(os.path.join(x, "lammps_*.log")) for x in dirs
         if pm:
             prof[sec] = float(pm.group(1)) / 100
     nb = re.search(r"Neighbor list builds = (\d+)", timed)
-    rss = rss_kb(text)
+    rss = rss_kb(text + (open(path + ".rss").read() if os.path.exists(path + ".rss") else ""))
+    if len(rss) != int(m.group(3)):  # a rank's figure missing: no sum to report
+        print("memory of %s: %d figures for %s ranks, left out" % (path, len(rss), m.group(3)))
+        rss = []
     runs.append(dict(code="lammps", config=m.group(1), N=int(m.group(2)), par=int(m.group(3)),
                      rep=int(m.group(4)), pps=natoms * steps / loop, loop_s=loop,
                      ke_initial=float(states["start"]["ke"]),
