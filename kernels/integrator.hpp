@@ -130,6 +130,18 @@ struct KickDriftRows {
     if (k == 1) return __builtin_shuffle(a, I4{1, 1, 2, 2});
     return __builtin_shuffle(a, I4{2, 3, 3, 3});
   }
+  // Per-particle sums of the twelve components of four particles (a[k] holds components
+  // 4 k .. 4 k + 3: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3), in the order x + y + z.
+  GRANULAR_AVX2_INLINE static V4 sum_by_particle(const V4 a[3]) {
+    using I4 = long __attribute__((vector_size(32)));
+    const V4 x =
+        __builtin_shuffle(__builtin_shuffle(a[0], a[1], I4{0, 3, 6, 6}), a[2], I4{0, 1, 2, 5});
+    const V4 y =
+        __builtin_shuffle(__builtin_shuffle(a[0], a[1], I4{1, 4, 7, 7}), a[2], I4{0, 1, 2, 6});
+    const V4 z =
+        __builtin_shuffle(__builtin_shuffle(a[0], a[1], I4{2, 5, 5, 5}), a[2], I4{0, 1, 4, 7});
+    return (x + y) + z;
+  }
   template <bool Rotations, bool Speed>
   GRANULAR_AVX2 double run_avx2(int i0, int i1, double& max_v2) const {
     const double step = dt;
@@ -146,12 +158,13 @@ struct KickDriftRows {
       }
     const V4 half_step = simd4::splat(0.5 * step), vstep = simd4::splat(step);
     const V4 mgb = simd4::splat(-damp.translational), mgr = simd4::splat(-damp.rotational);
-    double m = Kokkos::reduction_identity<double>::max();
-    double mv = max_v2;
+    // Running maxima per lane (lane p: particles i0 + p, i0 + p + 4, ...), combined at the
+    // end: a maximum with NaNs skipped (m) or kept (mv) is the same in any order.
+    V4 m4 = simd4::splat(Kokkos::reduction_identity<double>::max()), mv4 = simd4::splat(max_v2);
     int i = i0;
     for (; i + 4 <= i1; i += 4) {
       const V4 h4 = half_step / simd4::load(mass + i);
-      alignas(32) double uu[12], vv[12];
+      V4 uu[3], vv[3];
       for (int k = 0; k < 3; ++k) {
         const int o = 3 * i + 4 * k;
         const V4 vd = kicks4(v + o, f + o, spread(h4, k), pend, start, mgb);
@@ -162,8 +175,8 @@ struct KickDriftRows {
         V4 u = xd - simd4::load(x_ref + o);
         const M4 far = per4[k] & (u > half4[k]), near = per4[k] & (u < -half4[k]);
         u = far ? u - len4[k] : (near ? u + len4[k] : u);  // PeriodicBox::min_image
-        simd4::store(uu + 4 * k, u * u);
-        if (Speed) simd4::store(vv + 4 * k, vd * vd);
+        uu[k] = u * u;
+        if (Speed) vv[k] = vd * vd;
       }
       if (Rotations) {
         const V4 hr4 = half_step / simd4::load(inertia + i);
@@ -172,15 +185,19 @@ struct KickDriftRows {
           kicks4(w + o, q + o, spread(hr4, k), pend, start, mgr);
         }
       }
-      for (int p = 0; p < 4; ++p) {
-        double d2 = 0.0, v2 = 0.0;
-        for (int d = 0; d < 3; ++d) {
-          d2 += uu[3 * p + d];
-          if (Speed) v2 += vv[3 * p + d];
-        }
-        m = d2 > m ? d2 : m;
-        if (Speed) mv = v2 > mv || v2 != v2 ? v2 : mv;
+      // run()'s sums per particle, (0 + a_x) + a_y + a_z, in lanes: 0 + a is a for every
+      // square (never -0), so (a_x + a_y) + a_z.
+      const V4 d2 = sum_by_particle(uu);
+      m4 = d2 > m4 ? d2 : m4;
+      if (Speed) {
+        const V4 v2 = sum_by_particle(vv);
+        mv4 = (v2 > mv4) | (v2 != v2) ? v2 : mv4;
       }
+    }
+    double m = m4[0], mv = mv4[0];
+    for (int p = 1; p < 4; ++p) {
+      m = m4[p] > m ? m4[p] : m;
+      mv = mv4[p] > mv || mv4[p] != mv4[p] ? mv4[p] : mv;
     }
     max_v2 = mv;
     const double tail = run<Rotations, Speed>(i, i1, max_v2);

@@ -137,12 +137,11 @@ GRANULAR_AVX2_INLINE V load1(const double* base, const int* idx) {
   const __m128d a23 = _mm_loadh_pd(_mm_load_sd(base + idx[2]), base + idx[3]);
   return (V)_mm256_insertf128_pd(_mm256_castpd128_pd256(a01), a23, 1);
 }
-// min_image_of on four lanes: the same comparisons and the same one addition per lane.
-GRANULAR_AVX2_INLINE V min_image4(V dx, double l, bool periodic) {
-  if (!periodic) return dx;
-  const V len = ContactBatch::splat(l), hl = ContactBatch::splat(0.5 * l);
+// min_image_of on four lanes of a periodic axis: the same comparisons and the same one
+// addition per lane. The box's length, half of it and its negative come splat once per slab.
+GRANULAR_AVX2_INLINE V min_image4(V dx, V len, V hl, V nhl) {
   const V down = dx - len, up = dx + len;
-  return ContactBatch::sel(dx > hl, down, ContactBatch::sel(dx < -hl, up, dx));
+  return ContactBatch::sel(dx > hl, down, ContactBatch::sel(dx < nhl, up, dx));
 }
 }  // namespace near_stream_detail
 
@@ -162,12 +161,18 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   constexpr int kAhead = 16;     // entries
   for (int z = z0; z < z1; ++z)  // a row's empty sum: +0 (see the head of this file)
     for (int d = 0; d < 3; ++d) fh(empty[z], d) += 0.0, qh(empty[z], d) += 0.0;
+  // Local copies of the views' pointers: held in registers, not reloaded after each store.
+  double* const f = fh.p;
+  double* const q = qh.p;
   const double* const x = &hv.x(0, 0);
   const double* const v = &hv.v(0, 0);
   const double* const w = &hv.w(0, 0);
   const double* const rad = &hv.radius(0);
   const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
   const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
+  const V len0 = CB::splat(lx), len1 = CB::splat(ly), len2 = CB::splat(lz);
+  const V hl0 = CB::splat(0.5 * lx), hl1 = CB::splat(0.5 * ly), hl2 = CB::splat(0.5 * lz);
+  const V nhl0 = -hl0, nhl1 = -hl1, nhl2 = -hl2;
   const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
   const V vdt = CB::splat(dt);
   const CB::LaneParams par{CB::splat(pn.kn), CB::splat(pn.gn),   CB::splat(pt.kt),
@@ -186,16 +191,16 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
         __builtin_prefetch(x + 3 * ja);
         __builtin_prefetch(v + 3 * ja);
         __builtin_prefetch(w + 3 * ja);
-        __builtin_prefetch(&fh(ja, 0), 1);
-        __builtin_prefetch(&qh(ja, 0), 1);
+        __builtin_prefetch(f + 3 * ja, 1);
+        __builtin_prefetch(q + 3 * ja, 1);
       }
     const int *const ii = si + e, *const jj = sj + e;
     CB::Lanes c;
     V xi0, xi1, xi2, xj0, xj1, xj2;
     load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
-    c.X = min_image4(xi0 - xj0, lx, px);
-    c.Y = min_image4(xi1 - xj1, ly, py);
-    c.Z = min_image4(xi2 - xj2, lz, pz);
+    c.X = px ? min_image4(xi0 - xj0, len0, hl0, nhl0) : xi0 - xj0;
+    c.Y = py ? min_image4(xi1 - xj1, len1, hl1, nhl1) : xi1 - xj1;
+    c.Z = pz ? min_image4(xi2 - xj2, len2, hl2, nhl2) : xi2 - xj2;
     c.ai = load1(rad, ii), c.aj = load1(rad, jj);
     // split_row's test: touching() operation for operation.
     const V sum = c.ai + c.aj;
@@ -218,33 +223,35 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
       const int i = si[e + l];
       if (i != cur) {  // the previous row ends: its owner's own sum
         if (cur >= 0) {
-          for (int d = 0; d < 3; ++d) fh(cur, d) += fi[d];
-          for (int d = 0; d < 3; ++d) qh(cur, d) += qi[d];
+          double *const fc = f + 3L * cur, *const qc = q + 3L * cur;
+          for (int d = 0; d < 3; ++d) fc[d] += fi[d];
+          for (int d = 0; d < 3; ++d) qc[d] += qi[d];
         }
         cur = i;
         for (int d = 0; d < 3; ++d) fi[d] = 0.0, qi[d] = 0.0;
       }
-      const int r = sr[e + l];
+      double* const h = hist + H * static_cast<long>(sr[e + l]);
       if (!(touching >> l & 1)) {
-        forget_history<H>(hist, r);
+        forget_history<H>(h, 0);
         continue;
       }
-      const int j = sj[e + l];
+      const long j3 = 3L * sj[e + l];
+      double *const fj = f + j3, *const qj = q + j3;
       for (int d = 0; d < 3; ++d) {  // the batched rows' flush, contact by contact
         fi[d] += out[d][l];
-        fh(j, d) -= out[d][l];
+        fj[d] -= out[d][l];
       }
       for (int d = 0; d < 3; ++d) {
         qi[d] += out[3 + d][l];
-        qh(j, d) += out[6 + d][l];
+        qj[d] += out[6 + d][l];
       }
-      double* h = hist + r * H;
       h[0] = out[9][l], h[1] = out[10][l], h[2] = out[11][l];
     }
   }
   if (cur >= 0) {
-    for (int d = 0; d < 3; ++d) fh(cur, d) += fi[d];
-    for (int d = 0; d < 3; ++d) qh(cur, d) += qi[d];
+    double *const fc = f + 3L * cur, *const qc = q + 3L * cur;
+    for (int d = 0; d < 3; ++d) fc[d] += fi[d];
+    for (int d = 0; d < 3; ++d) qc[d] += qi[d];
   }
 }
 
