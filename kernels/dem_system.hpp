@@ -48,9 +48,11 @@ struct DemParams {
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
   // the owned entries within this gap of touching, read instead of the whole rows while no
-  // particle has moved half of it (the same bits either way). < 0: a sixteenth of `skin`
-  // (perf/README.md, design note: thinner gaps record more often, which costs about a pass
-  // over the whole rows, and save the apart entries of every other pass); 0: no near list.
+  // particle has moved half of it (the same bits either way). < 0: a thirty-second of `skin`
+  // where the near stream reads it (below), a sixteenth otherwise (perf/README.md, design
+  // note: thinner gaps record more often, which costs about a pass over the whole rows, and
+  // save the apart entries of every other pass; the stream's reads gain from the thinner
+  // gap, the rows' do not); 0: no near list.
   // Used in runs of at least kNearMinSteps steps without strain.
   double near_skin = -1.0;
   // Host one-pass kernel, batched law with one parameter set: the near list also recorded as
@@ -411,8 +413,19 @@ class DemSystem {
   };
   // Runs shorter than this record the list more often than they read it.
   static constexpr long kNearMinSteps = 16;
+  // Whether the near list's stream serves this model's force passes (near_rows(); the
+  // host one-pass kernel decides the same way, kernels/contact_forces.hpp).
+  bool stream_reads() const {
+#if GRANULAR_CONTACT_BATCH
+    return !two_pass() && params_.near_stream && params_.batched_contacts && cpu_has_avx() &&
+           ContactBatchLaw<Model>::usable(model_) && near_stream_usable(model_);
+#else
+    return false;
+#endif
+  }
   double near_skin() const {
-    return params_.near_skin < 0 ? params_.skin / 16 : params_.near_skin;
+    if (params_.near_skin >= 0) return params_.near_skin;
+    return params_.skin / (stream_reads() ? 32 : 16);
   }
   // A straining box moves every pair affinely (the list's skin test knows; the near list's
   // does not): no near list there.

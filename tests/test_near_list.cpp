@@ -98,7 +98,7 @@ void compare_with_whole_rows(bool batched) {
   DemParams whole = prm, fine = prm;
   prm.near_skin = 0.025;  // coarse: read more often than recorded in this stirred packing
   whole.near_skin = 0.0;  // no near list: every pass reads the whole rows
-  fine.near_skin = -1.0;  // the default (a sixteenth of the skin): recorded every few steps
+  fine.near_skin = -1.0;  // the default (a 16th or 32nd of the skin): recorded every few steps
   auto a = stirred_packing<Exec, Model>(prm);
   auto b = stirred_packing<Exec, Model>(whole);
   auto c = stirred_packing<Exec, Model>(fine);
@@ -134,6 +134,9 @@ void compare_stream_with_rows(double near_skin) {
   prm.near_skin = near_skin;
   DemParams rows = prm, whole = prm;
   rows.near_stream = false;
+  // The default gap is a thirty-second of the skin where the stream reads the near list, a
+  // sixteenth for rows: the rows get the stream's gap, to be recorded and read as often.
+  if (near_skin < 0 && cpu_has_avx2()) rows.near_skin = prm.skin / 32;
   whole.near_skin = 0.0;
   auto a = stirred_packing<Exec, Frictional>(prm);
   auto b = stirred_packing<Exec, Frictional>(rows);
