@@ -414,11 +414,11 @@ class DemSystem {
   // Runs shorter than this record the list more often than they read it.
   static constexpr long kNearMinSteps = 16;
   // Whether the near list's stream serves this model's force passes (near_rows(); the
-  // host one-pass kernel decides the same way, kernels/contact_forces.hpp).
+  // host one-pass kernel asks near_stream_usable() too, kernels/contact_forces.hpp).
   bool stream_reads() const {
 #if GRANULAR_CONTACT_BATCH
-    return !two_pass() && params_.near_stream && params_.batched_contacts && cpu_has_avx() &&
-           ContactBatchLaw<Model>::usable(model_) && near_stream_usable(model_);
+    return !two_pass() && params_.near_stream && params_.batched_contacts &&
+           near_stream_usable(model_);
 #else
     return false;
 #endif
