@@ -143,6 +143,15 @@ GRANULAR_AVX2_INLINE V min_image4(V dx, V len, V hl, V nhl) {
   const V down = dx - len, up = dx + len;
   return ContactBatch::sel(dx > hl, down, ContactBatch::sel(dx < nhl, up, dx));
 }
+// a[0 .. 2] += (xy, z), component by component.
+GRANULAR_AVX2_INLINE void add3(double* a, __m128d xy, double z) {
+  _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), xy));
+  a[2] += z;
+}
+// Where lane l's (x, y) pair lies in the unpacked rows (x0 y0 x2 y2 | x1 y1 x3 y3).
+GRANULAR_AVX2_INLINE constexpr int pair_at(int l) {
+  return (l & 1) * ContactBatch::kW + (l >> 1) * 2;
+}
 }  // namespace near_stream_detail
 
 // The stream entries e0 .. e1 - 1 (one slab) and the slab's rows without near entries
@@ -177,9 +186,13 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   const V vdt = CB::splat(dt);
   const CB::LaneParams par{CB::splat(pn.kn), CB::splat(pn.gn),   CB::splat(pt.kt),
                            CB::splat(pt.gt), CB::splat(pt.mu_s), CB::splat(pt.mu_d)};
-  int cur = -1;  // the owner whose row is being summed
-  double fi[3] = {0, 0, 0}, qi[3] = {0, 0, 0};
-  alignas(32) double out[12][CB::kW];
+  // The owner whose row is being summed, and its sums: (x, y) pairs and z.
+  int cur = -1;
+  __m128d fxy = _mm_setzero_pd(), qxy = _mm_setzero_pd();
+  double fz = 0.0, qz = 0.0;
+  // The law's outputs (force on the owner, torques on owner and partner, spring) of the
+  // four lanes: the (x, y) pair of lane l at xy[o] + pair_at(l), its z at z4[o][l].
+  alignas(32) double xy[4][2 * CB::kW], z4[4][CB::kW];
   for (int e = e0; e < e1; e += CB::kW) {
     const int valid = e1 - e < CB::kW ? e1 - e : CB::kW;
     // The partners of the entries 16 ahead (four vectors): their lines are requested now, so
@@ -216,43 +229,45 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
       load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
       load3(hist, sr + e, c.s0, c.s1, c.s2);
       CB::law(c, par, vdt, touch);
-      const V res[12] = {c.F0, c.F1, c.F2, c.q0, c.q1, c.q2, c.p0, c.p1, c.p2, c.s0, c.s1, c.s2};
-      for (int o = 0; o < 12; ++o) CB::store(out[o], res[o]);
+      // Unpacked into (x, y) pairs, so that the scatter below moves each lane's vectors as
+      // one 16-byte pair and a z: a third fewer loads, stores and additions than component
+      // by component (1.00-1.06x within one run), each component's operation unchanged.
+      const V ox[4] = {c.F0, c.q0, c.p0, c.s0}, oy[4] = {c.F1, c.q1, c.p1, c.s1};
+      const V oz[4] = {c.F2, c.q2, c.p2, c.s2};
+      for (int o = 0; o < 4; ++o) {
+        CB::store(xy[o], (V)_mm256_unpacklo_pd((__m256d)ox[o], (__m256d)oy[o]));
+        CB::store(xy[o] + CB::kW, (V)_mm256_unpackhi_pd((__m256d)ox[o], (__m256d)oy[o]));
+        CB::store(z4[o], oz[o]);
+      }
     }
     for (int l = 0; l < valid; ++l) {
       const int i = si[e + l];
       if (i != cur) {  // the previous row ends: its owner's own sum
-        if (cur >= 0) {
-          double *const fc = f + 3L * cur, *const qc = q + 3L * cur;
-          for (int d = 0; d < 3; ++d) fc[d] += fi[d];
-          for (int d = 0; d < 3; ++d) qc[d] += qi[d];
-        }
+        if (cur >= 0) add3(f + 3L * cur, fxy, fz), add3(q + 3L * cur, qxy, qz);
         cur = i;
-        for (int d = 0; d < 3; ++d) fi[d] = 0.0, qi[d] = 0.0;
+        fxy = qxy = _mm_setzero_pd();
+        fz = qz = 0.0;
       }
       double* const h = hist + H * static_cast<long>(sr[e + l]);
       if (!(touching >> l & 1)) {
         forget_history<H>(h, 0);
         continue;
       }
+      // The batched rows' flush, contact by contact: f_i += F, f_j -= F, q_i += q, q_j += p.
       const long j3 = 3L * sj[e + l];
-      double *const fj = f + j3, *const qj = q + j3;
-      for (int d = 0; d < 3; ++d) {  // the batched rows' flush, contact by contact
-        fi[d] += out[d][l];
-        fj[d] -= out[d][l];
-      }
-      for (int d = 0; d < 3; ++d) {
-        qi[d] += out[3 + d][l];
-        qj[d] += out[6 + d][l];
-      }
-      h[0] = out[9][l], h[1] = out[10][l], h[2] = out[11][l];
+      const int at = pair_at(l);
+      const __m128d F = _mm_load_pd(xy[0] + at);
+      fxy = _mm_add_pd(fxy, F), fz += z4[0][l];
+      double* const fj = f + j3;
+      _mm_storeu_pd(fj, _mm_sub_pd(_mm_loadu_pd(fj), F));
+      fj[2] -= z4[0][l];
+      qxy = _mm_add_pd(qxy, _mm_load_pd(xy[1] + at)), qz += z4[1][l];
+      add3(q + j3, _mm_load_pd(xy[2] + at), z4[2][l]);
+      _mm_storeu_pd(h, _mm_load_pd(xy[3] + at));
+      h[2] = z4[3][l];
     }
   }
-  if (cur >= 0) {
-    double *const fc = f + 3L * cur, *const qc = q + 3L * cur;
-    for (int d = 0; d < 3; ++d) fc[d] += fi[d];
-    for (int d = 0; d < 3; ++d) qc[d] += qi[d];
-  }
+  if (cur >= 0) add3(f + 3L * cur, fxy, fz), add3(q + 3L * cur, qxy, qz);
 }
 
 #endif  // GRANULAR_CONTACT_BATCH
