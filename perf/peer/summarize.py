@@ -64,7 +64,7 @@ for path in sorted(sum((glob.glob(os.path.join(x, "engine_*.json")) for x in dir
     log = open(path[:-5] + ".log", errors="replace").read() if os.path.exists(path[:-5] + ".log") else ""
     rss = rss_kb(log)
     runs.append(dict(code="engine", config=m.group(1), N=int(m.group(2)), par=int(m.group(3)),
-                     rep=int(m.group(4)), pps=row["median_particle_steps_per_s"],
+                     rep=int(m.group(4)), run=os.path.basename(os.path.dirname(path)), pps=row["median_particle_steps_per_s"],
                      ke_initial=row.get("ekin_translational_initial_J"),
                      ke_warmup=row["ekin_translational_after_warmup_J"],
                      ke_end=row["ekin_translational_after_timed_run_J"],
@@ -104,7 +104,7 @@ for path in sorted(sum((glob.glob(os.path.join(x, "lammps_*.log")) for x in dirs
         print("memory of %s: %d figures for %s ranks, left out" % (path, len(rss), m.group(3)))
         rss = []
     runs.append(dict(code="lammps", config=m.group(1), N=int(m.group(2)), par=int(m.group(3)),
-                     rep=int(m.group(4)), pps=natoms * steps / loop, loop_s=loop,
+                     rep=int(m.group(4)), run=os.path.basename(os.path.dirname(path)), pps=natoms * steps / loop, loop_s=loop,
                      ke_initial=float(states["start"]["ke"]),
                      ke_warmup=float(states["warmup"]["ke"]), ke_end=float(states["end"]["ke"]),
                      z_initial=float(states["start"]["z"]), z_end=float(states["end"]["z"]),
@@ -173,9 +173,16 @@ for phys, model, role in PAIRS:
         for p in pars:
             a, b = find("engine", phys, N, p), find("lammps", model, N, p)
             if a and b:
+                # Repetition by repetition as well: each engine run against the LAMMPS run of the
+                # same repetition of the same run directory (minutes apart, so in a like state
+                # of the machine); the ratio of the medians above pairs no two runs.
+                lam = {(r["run"], r["rep"]): r["pps"] for r in group("lammps", model, N, p)}
+                pr = [r["pps"] / lam[(r["run"], r["rep"])] for r in group("engine", phys, N, p)
+                      if (r["run"], r["rep"]) in lam]
                 ratios.append(dict(engine=phys, lammps=model, role=role, N=N, threads_vs_ranks=p,
                                    engine_pps=a["median_pps"], lammps_pps=b["median_pps"],
-                                   ratio=a["median_pps"] / b["median_pps"]))
+                                   ratio=a["median_pps"] / b["median_pps"], pair_ratios=pr,
+                                   pair_ratio_median=statistics.median(pr) if pr else None))
 
 cross = []
 for phys, model in CROSS:
@@ -235,6 +242,15 @@ for phys, model, role in PAIRS:
             cells += [M(a["median_pps"]) if a else "-", M(b["median_pps"]) if b else "-",
                       "**%.2f**" % (a["median_pps"] / b["median_pps"]) if a and b else "-"]
         L.append("| %s | %s (%s) | %d | %s |" % (phys, model, role.split(" (")[0], N, " | ".join(cells)))
+L.append("\nRatio repetition by repetition against the fastest style (each engine run against the "
+         "LAMMPS run of the same repetition):\n")
+L.append("| engine physics | LAMMPS style | N | threads : ranks | ratios | median | min |")
+L.append("|---|---|---|---|---|---|---|")
+for r in ratios:
+    if r["role"].startswith("fastest") and r["pair_ratios"]:
+        L.append("| %s | %s | %d | %d : %d | %s | %.2f | %.2f |" % (
+            r["engine"], r["lammps"], r["N"], r["threads_vs_ranks"], r["threads_vs_ranks"],
+            ", ".join("%.2f" % x for x in r["pair_ratios"]), r["pair_ratio_median"], min(r["pair_ratios"])))
 L.append("\nSpread of the repetitions ((max - min)/median):\n")
 L.append("| code | configuration | N | threads/ranks | reps | median | min..max | spread |")
 L.append("|---|---|---|---|---|---|---|---|")
