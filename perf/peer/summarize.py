@@ -48,6 +48,10 @@ PAIRS = [
 CROSS = [("friction", "hooke_abs"), ("frictionless", "frictionless_abs")]
 
 
+def run_of(path):  # the run directory a log belongs to
+    return os.path.basename(os.path.dirname(path))
+
+
 def rss_kb(text):
     return [int(x) for x in re.findall(r"PEER_RSS_KB (\d+)", text)]
 
@@ -64,7 +68,7 @@ for path in sorted(sum((glob.glob(os.path.join(x, "engine_*.json")) for x in dir
     log = open(path[:-5] + ".log", errors="replace").read() if os.path.exists(path[:-5] + ".log") else ""
     rss = rss_kb(log)
     runs.append(dict(code="engine", config=m.group(1), N=int(m.group(2)), par=int(m.group(3)),
-                     rep=int(m.group(4)), run=os.path.basename(os.path.dirname(path)), pps=row["median_particle_steps_per_s"],
+                     rep=int(m.group(4)), run=run_of(path), pps=row["median_particle_steps_per_s"],
                      ke_initial=row.get("ekin_translational_initial_J"),
                      ke_warmup=row["ekin_translational_after_warmup_J"],
                      ke_end=row["ekin_translational_after_timed_run_J"],
@@ -104,7 +108,7 @@ for path in sorted(sum((glob.glob(os.path.join(x, "lammps_*.log")) for x in dirs
         print("memory of %s: %d figures for %s ranks, left out" % (path, len(rss), m.group(3)))
         rss = []
     runs.append(dict(code="lammps", config=m.group(1), N=int(m.group(2)), par=int(m.group(3)),
-                     rep=int(m.group(4)), run=os.path.basename(os.path.dirname(path)), pps=natoms * steps / loop, loop_s=loop,
+                     rep=int(m.group(4)), run=run_of(path), pps=natoms * steps / loop, loop_s=loop,
                      ke_initial=float(states["start"]["ke"]),
                      ke_warmup=float(states["warmup"]["ke"]), ke_end=float(states["end"]["ke"]),
                      z_initial=float(states["start"]["z"]), z_end=float(states["end"]["z"]),
