@@ -51,16 +51,25 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
   // Whether every pair has the parameters of pair (0, 0), bit for bit (so that broadcasting
   // them changes no result, not even the sign of a zero).
   static bool uniform(const ContactModel<LinearNormal, CoulombTangential>& m) {
-    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
-    const LinearNormal::Params& n0 = m.normal.table.p[0][0];
+    if (!uniform_normal(m.normal)) return false;
     const CoulombTangential::Params& t0 = m.tangential.table.p[0][0];
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b) {
-        const LinearNormal::Params& n = m.normal.table.p[a][b];
         const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-        if (!same(n.kn, n0.kn) || !same(n.gn, n0.gn) || !same(t.kt, t0.kt) || !same(t.gt, t0.gt) ||
-            !same(t.mu_s, t0.mu_s) || !same(t.mu_d, t0.mu_d))
+        if (!same_bits(t.kt, t0.kt) || !same_bits(t.gt, t0.gt) || !same_bits(t.mu_s, t0.mu_s) ||
+            !same_bits(t.mu_d, t0.mu_d))
           return false;
+      }
+    return true;
+  }
+  static bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+  // Whether every pair has the normal parameters of pair (0, 0), bit for bit.
+  static bool uniform_normal(const LinearNormal& l) {
+    const LinearNormal::Params& n0 = l.table.p[0][0];
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        const LinearNormal::Params& n = l.table.p[a][b];
+        if (!same_bits(n.kn, n0.kn) || !same_bits(n.gn, n0.gn)) return false;
       }
     return true;
   }

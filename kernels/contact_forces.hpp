@@ -581,6 +581,28 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
   using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
   const double rt[3] = {rate[0], rate[1], rate[2]};
 #if GRANULAR_CONTACT_BATCH
+  // The frictionless linear law reads the stream where it can, and records it after the
+  // rows below.
+  NearStream* const nst = is_frictionless_linear<Model> ? nr.stream : nullptr;
+  const bool normal_stream = batched && nst != nullptr && near_stream_usable(m);
+  if constexpr (is_frictionless_linear<Model>) {
+    if (Mode == NearMode::Use && normal_stream && nst->ready) {
+      const int *si = nst->i.data(), *sj = nst->j.data(), *sb = nst->begin.data();
+      const int *se = nst->empty.data(), *eb = nst->empty_begin.data();
+      const LinearNormal::Params pn = m.normal.table(0, 0);
+      ++nst->reads;
+      for (int r = 0; r < rounds; ++r) {
+        const int tasks = (slabs - r + rounds - 1) / rounds;
+        Kokkos::parallel_for("dem::compute_forces::near_stream", Policy(0, tasks),
+                             [=](const int t) {
+                               const int s = t * rounds + r;
+                               near_stream_slab_normal(hv, b, pn, si, sj, sb[s], sb[s + 1], se,
+                                                       eb[s], eb[s + 1], fh, rt);
+                             });
+      }
+      return;
+    }
+  }
   if constexpr (ContactBatchLaw<Model>::available) {
     if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(m)) {
       NearStream* const st = nr.stream;
@@ -628,6 +650,10 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
             one_pass_row<Model, Mode>(hv, b, m, list, hist, fh, qh, r3, dt, nr, order(q));
         });
   }
+#if GRANULAR_CONTACT_BATCH
+  if (Mode == NearMode::Record && normal_stream)
+    record_near_stream<ExecSpace>(*nst, list, order, slab_begin, slabs, nr);
+#endif
 }
 
 // One pass, for host backends: the owner of each contact evaluates it, adds the force to

@@ -49,15 +49,16 @@ struct DemParams {
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
   // the owned entries within this gap of touching, read instead of the whole rows while no
   // particle has moved half of it (the same bits either way). < 0: a thirty-second of `skin`
-  // where the near stream reads it (below), a sixteenth otherwise (perf/README.md, design
-  // note: thinner gaps record more often, which costs about a pass over the whole rows, and
-  // save the apart entries of every other pass; the stream's reads gain from the thinner
-  // gap, the rows' do not); 0: no near list.
+  // where the near stream reads it with the frictional law (below), a sixteenth otherwise
+  // (perf/README.md, design note: thinner gaps record more often, which costs about a pass
+  // over the whole rows, and save the apart entries of every other pass; the frictional
+  // stream's reads gain from the thinner gap, the rows' and the frictionless stream's do
+  // not); 0: no near list.
   // Used in runs of at least kNearMinSteps steps without strain.
   double near_skin = -1.0;
-  // Host one-pass kernel, batched law with one parameter set: the near list also recorded as
-  // a flat stream of contacts and read four at a time (kernels/near_stream.hpp; the same
-  // bits either way).
+  // Host one-pass kernel, the batched law or the frictionless linear law, with one parameter
+  // set: the near list also recorded as a flat stream of contacts and read four at a time
+  // (kernels/near_stream.hpp; the same bits either way).
   bool near_stream = true;
 };
 
@@ -425,7 +426,7 @@ class DemSystem {
   }
   double near_skin() const {
     if (params_.near_skin >= 0) return params_.near_skin;
-    return params_.skin / (stream_reads() ? 32 : 16);
+    return params_.skin / (stream_reads() && Model::history > 0 ? 32 : 16);
   }
   // A straining box moves every pair affinely (the list's skin test knows; the near list's
   // does not): no near list there.
