@@ -652,7 +652,7 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
   }
 #if GRANULAR_CONTACT_BATCH
   if (Mode == NearMode::Record && normal_stream)
-    record_near_stream<ExecSpace>(*nst, list, order, slab_begin, slabs, nr);
+    record_near_stream<ExecSpace>(*nst, list, order, slab_begin, slabs, nr, false);
 #endif
 }
 

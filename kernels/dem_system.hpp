@@ -204,6 +204,10 @@ class DemSystem {
   // With sorting, particles are first put in cell order, so that neighbours sit close in
   // memory; every per-particle array is permuted and the history follows by identity.
   void rebuild() {
+    // The near list and its stream are recorded again after a rebuild: released first, so
+    // that they do not add to the peak of the permutation and the build.
+    near_k_ = int_view();
+    near_stream_.release();
     typename Particles<ExecSpace>::int_view order;
     if (params_.sort) {
       nl_.bin(p_, box_);

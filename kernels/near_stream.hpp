@@ -22,7 +22,7 @@
 // are evaluated contact by contact, not batched, but they pay the same loop per row of
 // unpredictable length and a dependent load of the partner's index through the list. An
 // earlier form that gathered every input lane by lane gained nothing (0.99x); with the
-// loads and the paired scatter of the frictional stream it gains 1.06-1.08x (design note).
+// loads and the paired scatter of the frictional stream it gains 1.13-1.19x (design note).
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <type_traits>
@@ -39,14 +39,20 @@
 namespace granular {
 
 // The stream of one recording of the near list: entry e joins owner i[e] with partner j[e],
-// history row r[e]; slab s's entries are begin[s] .. begin[s + 1] - 1 and its rows without a
-// near entry are empty[empty_begin[s]] .. empty[empty_begin[s + 1] - 1]. Four entries of
-// valid indices follow the last one (gathered by the last vector, never scattered).
+// history row r[e] (empty for a law without history); slab s's entries are begin[s] .. begin[s + 1]
+// - 1 and its rows without a near entry are empty[empty_begin[s]] .. empty[empty_begin[s + 1] - 1].
+// Four entries of valid indices follow the last one (gathered by the last vector, never scattered).
 struct NearStream {
   std::vector<int> i, j, r, begin, empty, empty_begin;
   // Whether the last force pass recorded it (the next ones may read it).
   bool ready = false;
   long reads = 0;  // force passes that read it
+  // Frees the arrays (a neighbour rebuild invalidates them; the count of reads stays).
+  void release() {
+    for (std::vector<int>* a : {&i, &j, &r, &begin, &empty, &empty_begin})
+      std::vector<int>().swap(*a);
+    ready = false;
+  }
 };
 
 // Whether 3 * index stays an int for every history row and particle (the loads' offsets).
@@ -76,10 +82,12 @@ bool near_stream_usable(const Model& m) {
     return false;
 }
 
-// Writes the stream of the near list just recorded (nr) for the slabs of `list`.
+// Writes the stream of the near list just recorded (nr) for the slabs of `list`; the
+// history rows only where the law has a history (`rows`).
 template <class ExecSpace>
 void record_near_stream(NearStream& st, const HostListRows& list, const HostArray<const int>& order,
-                        const HostArray<const int>& slab_begin, int slabs, const NearRows& nr) {
+                        const HostArray<const int>& slab_begin, int slabs, const NearRows& nr,
+                        bool rows = true) {
   using Policy = Kokkos::RangePolicy<ExecSpace>;
   st.begin.assign(slabs + 1, 0);
   st.empty_begin.assign(slabs + 1, 0);
@@ -96,14 +104,18 @@ void record_near_stream(NearStream& st, const HostListRows& list, const HostArra
   });
   for (int s = 0; s < slabs; ++s) sb[s + 1] += sb[s], eb[s + 1] += eb[s];
   const size_t total = static_cast<size_t>(sb[slabs]) + ContactBatch::kW;
-  if (st.i.size() < total) {  // grown with room to spare: recordings come every few steps
-    const size_t room = total + total / 8;
-    st.i.resize(room), st.j.resize(room), st.r.resize(room);
-  }
+  // Grown with room to spare (recordings come every few steps), the old arrays released
+  // first: their content is rewritten below, and holding both would raise the peak memory.
+  auto grow = [&](std::vector<int>& a, bool used) {
+    if (used && a.size() >= total) return;
+    std::vector<int>().swap(a);
+    if (used) a.resize(total + total / 8);
+  };
+  grow(st.i, true), grow(st.j, true), grow(st.r, rows);
   st.empty.resize(static_cast<size_t>(eb[slabs]));
   int* const si = st.i.data();
   int* const sj = st.j.data();
-  int* const sr = st.r.data();
+  int* const sr = rows ? st.r.data() : nullptr;
   int* const se = st.empty.data();
   Kokkos::parallel_for("dem::near_stream::record", Policy(0, slabs), [=](const int s) {
     int e = sb[s], z = eb[s];
@@ -113,14 +125,17 @@ void record_near_stream(NearStream& st, const HostListRows& list, const HostArra
       if (c == 0) se[z++] = i;
       for (int a = pb; a < pb + c; ++a, ++e) {
         const int k = nr.k[a];
-        si[e] = i, sj[e] = list.neighbors(k), sr[e] = row0 + k;
+        si[e] = i, sj[e] = list.neighbors(k);
+        if (sr != nullptr) sr[e] = row0 + k;
       }
     }
   });
   // The padding: the first entry's particles and history row 0 (valid indices wherever there
   // is an entry; with none, no vector is read).
-  for (int e = sb[slabs]; e < sb[slabs] + ContactBatch::kW; ++e)
-    si[e] = sb[slabs] > 0 ? si[0] : 0, sj[e] = sb[slabs] > 0 ? sj[0] : 0, sr[e] = 0;
+  for (int e = sb[slabs]; e < sb[slabs] + ContactBatch::kW; ++e) {
+    si[e] = sb[slabs] > 0 ? si[0] : 0, sj[e] = sb[slabs] > 0 ? sj[0] : 0;
+    if (sr != nullptr) sr[e] = 0;
+  }
   st.ready = true;
 }
 

@@ -11,8 +11,8 @@
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --near-skin S: the force pass's near list (DemParams::near_skin: < 0, the default, a 32nd of
-// the skin where the near stream reads it, a 16th elsewhere; 0 none; the same bits for any
-// value).
+// the skin where the near stream reads it for the frictional law, a 16th elsewhere; 0 none;
+// the same bits for any value).
 // --alternate batch|near|stream [--block B]: after the timed run, steps the same trajectory in
 // blocks of B steps (default 100) with the batch (the near list, the near list's stream)
 // switched on and off in turn and reports the ratio of the two rates (median over the pairs of
