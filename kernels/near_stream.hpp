@@ -183,6 +183,35 @@ GRANULAR_AVX2_INLINE void add3(double* a, __m128d xy, double z) {
 GRANULAR_AVX2_INLINE constexpr int pair_at(int l) {
   return (l & 1) * ContactBatch::kW + (l >> 1) * 2;
 }
+// The box for the lanes: its periodicity, and each axis's length, half length and negative
+// half length splat once per slab.
+struct LaneBox {
+  bool px, py, pz;
+  V len0, len1, len2, hl0, hl1, hl2, nhl0, nhl1, nhl2;
+};
+GRANULAR_AVX2_INLINE LaneBox lane_box(const PeriodicBox& b) {
+  using CB = ContactBatch;
+  const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
+  const V hl0 = CB::splat(0.5 * lx), hl1 = CB::splat(0.5 * ly), hl2 = CB::splat(0.5 * lz);
+  return {b.periodic[0], b.periodic[1], b.periodic[2], CB::splat(lx), CB::splat(ly), CB::splat(lz),
+          hl0,           hl1,           hl2,           -hl0,          -hl1,          -hl2};
+}
+// The separation x_i - x_j (minimum image) and the radii of the four entries (ii, jj), and
+// which of the first `valid` lanes touch: split_row's test, touching() operation for
+// operation (r2: the squared distance it compares).
+GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const double* rad,
+                                      const int* ii, const int* jj, int valid, V& X, V& Y, V& Z,
+                                      V& ai, V& aj, V& r2) {
+  V xi0, xi1, xi2, xj0, xj1, xj2;
+  load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
+  X = lb.px ? min_image4(xi0 - xj0, lb.len0, lb.hl0, lb.nhl0) : xi0 - xj0;
+  Y = lb.py ? min_image4(xi1 - xj1, lb.len1, lb.hl1, lb.nhl1) : xi1 - xj1;
+  Z = lb.pz ? min_image4(xi2 - xj2, lb.len2, lb.hl2, lb.nhl2) : xi2 - xj2;
+  ai = load1(rad, ii), aj = load1(rad, jj);
+  const V sum = ai + aj;
+  r2 = X * X + Y * Y + Z * Z;
+  return (M)(r2 < sum * sum) & (M{0, 1, 2, 3} < valid);
+}
 }  // namespace near_stream_detail
 
 // The stream entries e0 .. e1 - 1 (one slab) and the slab's rows without near entries
@@ -208,11 +237,7 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
   const double* const v = &hv.v(0, 0);
   const double* const w = &hv.w(0, 0);
   const double* const rad = &hv.radius(0);
-  const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
-  const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
-  const V len0 = CB::splat(lx), len1 = CB::splat(ly), len2 = CB::splat(lz);
-  const V hl0 = CB::splat(0.5 * lx), hl1 = CB::splat(0.5 * ly), hl2 = CB::splat(0.5 * lz);
-  const V nhl0 = -hl0, nhl1 = -hl1, nhl2 = -hl2;
+  const LaneBox lb = lane_box(b);
   const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
   const V vdt = CB::splat(dt);
   const CB::LaneParams par{CB::splat(pn.kn), CB::splat(pn.gn),   CB::splat(pt.kt),
@@ -240,16 +265,8 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
       }
     const int *const ii = si + e, *const jj = sj + e;
     CB::Lanes c;
-    V xi0, xi1, xi2, xj0, xj1, xj2;
-    load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
-    c.X = px ? min_image4(xi0 - xj0, len0, hl0, nhl0) : xi0 - xj0;
-    c.Y = py ? min_image4(xi1 - xj1, len1, hl1, nhl1) : xi1 - xj1;
-    c.Z = pz ? min_image4(xi2 - xj2, len2, hl2, nhl2) : xi2 - xj2;
-    c.ai = load1(rad, ii), c.aj = load1(rad, jj);
-    // split_row's test: touching() operation for operation.
-    const V sum = c.ai + c.aj;
-    const V r2 = c.X * c.X + c.Y * c.Y + c.Z * c.Z;
-    const M touch = (M)(r2 < sum * sum) & (M{0, 1, 2, 3} < valid);
+    V r2;
+    const M touch = touching_lanes(lb, x, rad, ii, jj, valid, c.X, c.Y, c.Z, c.ai, c.aj, r2);
     const int touching = CB::lanes(touch);
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
@@ -320,11 +337,7 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
   const double* const x = &hv.x(0, 0);
   const double* const v = &hv.v(0, 0);
   const double* const rad = &hv.radius(0);
-  const double lx = b.len[0], ly = b.len[1], lz = b.len[2];
-  const bool px = b.periodic[0], py = b.periodic[1], pz = b.periodic[2];
-  const V len0 = CB::splat(lx), len1 = CB::splat(ly), len2 = CB::splat(lz);
-  const V hl0 = CB::splat(0.5 * lx), hl1 = CB::splat(0.5 * ly), hl2 = CB::splat(0.5 * lz);
-  const V nhl0 = -hl0, nhl1 = -hl1, nhl2 = -hl2;
+  const LaneBox lb = lane_box(b);
   const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
   const V kn = CB::splat(pn.kn), gn = CB::splat(pn.gn), one = CB::splat(1.0);
   int cur = -1;
@@ -341,15 +354,8 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
         __builtin_prefetch(f + 3 * ja, 1);
       }
     const int *const ii = si + e, *const jj = sj + e;
-    V xi0, xi1, xi2, xj0, xj1, xj2;
-    load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
-    const V X = px ? min_image4(xi0 - xj0, len0, hl0, nhl0) : xi0 - xj0;
-    const V Y = py ? min_image4(xi1 - xj1, len1, hl1, nhl1) : xi1 - xj1;
-    const V Z = pz ? min_image4(xi2 - xj2, len2, hl2, nhl2) : xi2 - xj2;
-    const V ai = load1(rad, ii), aj = load1(rad, jj);
-    const V sum = ai + aj;
-    const V r2 = X * X + Y * Y + Z * Z;  // touching()'s test, operation for operation
-    const int touching = CB::lanes((M)(r2 < sum * sum) & (M{0, 1, 2, 3} < valid));
+    V X, Y, Z, ai, aj, r2;
+    const int touching = CB::lanes(touching_lanes(lb, x, rad, ii, jj, valid, X, Y, Z, ai, aj, r2));
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
       load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
