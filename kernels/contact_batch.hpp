@@ -16,7 +16,8 @@
 // faster, and its refinements (the split writing into the batch's slots, parameters
 // broadcast for one species, the rare branches skipped) 1.13-1.18x more; the frictionless
 // law, whose evaluation is a few operations, loses to the gather and scatter in two-lane
-// SSE2 and in AVX, so it stays contact by contact.
+// SSE2 and in AVX, so its rows stay contact by contact (the near list's stream, which loads
+// its inputs without a gather, does evaluate it in lanes: kernels/near_stream.hpp).
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <cmath>

@@ -1,5 +1,6 @@
 // The near list as one flat stream of contacts per slab, for the host one-pass force kernel
-// with the batched frictional law (kernels/contact_forces.hpp, kernels/contact_batch.hpp).
+// with the batched frictional law and with the frictionless linear law
+// (kernels/contact_forces.hpp, kernels/contact_batch.hpp).
 //
 // The batched rows split each owner row into its touching entries, copy the touching pairs'
 // positions, velocities, spins and springs into the batch's slots, evaluate them four at a
