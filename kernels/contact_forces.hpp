@@ -21,6 +21,11 @@ struct Damping {
   double rotational = 0.0;     // gamma_br: q = -gamma_br omega
 };
 
+// The two-pass kernel's byte per pair row: 1 where the contact touched this step, 0 where it
+// was apart (and its row was left unwritten). Empty where rows are not flagged.
+template <class ExecSpace>
+using RowFlags = Kokkos::View<unsigned char*, typename ExecSpace::memory_space>;
+
 // One particle's state in registers: loaded once for i, once per partner j.
 struct Body {
   double x[3], v[3], w[3], a, m;
@@ -127,14 +132,20 @@ struct NoPairHook {
 // the force's sign flipped. No atomics, and a summation order independent of threads and
 // backend. The classical laws' rows are pair rows (pair_begin, pair_row); the multi-contact
 // laws' are list entries (offsets, mirror).
+// `flags` (pair rows only; empty: every row is read): one byte per row, 0 where the
+// contacts pass found the pair apart and left its row unwritten. Such a row is not read; the
+// sums add the +0 its zero row would have added (x + 0 is not x when x is -0), so the bits
+// are those of zero rows.
 template <class ExecSpace, class Model, class PairView, class IndexView>
 void gather_contact_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                            const PairView& pair, const Damping& damping, const IndexView& own_row,
-                           const IndexView& other_row, const char* label) {
+                           const IndexView& other_row, const char* label,
+                           const RowFlags<ExecSpace>& flags = {}) {
   const ParticleViews<ExecSpace> pv(p);
   auto f = p.f, torque = p.torque;
   auto offsets = nl.offsets(), owned_end = nl.owned_end();
   const double gb = damping.translational, gr = damping.rotational;
+  const bool flagged = flags.extent(0) > 0;
   Kokkos::parallel_for(
       label, Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
         constexpr bool rot = Model::rotations;
@@ -146,12 +157,23 @@ void gather_contact_forces(const Particles<ExecSpace>& p, const NeighborList<Exe
           for (int d = 0; d < 3; ++d) qi[d] = -gr * pv.w(i, d);
         const int r0 = own_row(i), own = owned_end(i) - offsets(i);
         for (int r = r0; r < r0 + own; ++r) {
+          if (flagged && flags(r) == 0) {
+            for (int d = 0; d < 3; ++d) fi[d] += 0.0;
+            if constexpr (rot)
+              for (int d = 0; d < 3; ++d) qi[d] += 0.0;
+            continue;
+          }
           for (int d = 0; d < 3; ++d) fi[d] += pair(r, d);
           if constexpr (rot)
             for (int d = 0; d < 3; ++d) qi[d] += pair(r, 3 + d);
         }
         for (int k = owned_end(i); k < offsets(i + 1); ++k) {
           const int r = other_row(k);
+          if (flagged && flags(r) == 0) {  // fi - (+0) is fi, -0 included
+            if constexpr (rot)
+              for (int d = 0; d < 3; ++d) qi[d] += 0.0;
+            continue;
+          }
           for (int d = 0; d < 3; ++d) fi[d] -= pair(r, d);
           if constexpr (rot)
             for (int d = 0; d < 3; ++d) qi[d] += pair(r, 6 + d);
@@ -244,11 +266,15 @@ void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSp
 // The classical laws' two passes, indexed by pair rows (NeighborList::pair_begin): the
 // per-contact array has one row per contact, half the list, next to the history rows.
 // One contact: evaluated into row r (force on the owner i, torques on i and on the partner j),
-// its history advanced; an apart contact leaves a zero row and forgets its history.
-template <class Model, class PV, class HistoryView, class PairView>
+// its history advanced; an apart contact forgets its history and leaves a zero row, or, where
+// rows are flagged (`flagged`), marks its byte of `flags` 0 and leaves its row unwritten:
+// about 40 % of the listed pairs of a dense packing are apart, and their zero rows were
+// written by this pass and read back by the gather.
+template <class Model, class PV, class HistoryView, class PairView, class FlagView>
 KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, const Model& m,
                                         const Body& bi, const int j, const int r,
                                         const HistoryView& history, const PairView& pair,
+                                        const FlagView& flags, const bool flagged,
                                         const double r3[3], const double dt) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
@@ -256,7 +282,10 @@ KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, cons
   (void)history;
   double rx, ry, rz, r2;
   if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
-    for (int c = 0; c < NB; ++c) pair(r, c) = 0.0;
+    if (flagged)
+      flags(r) = 0;
+    else
+      for (int c = 0; c < NB; ++c) pair(r, c) = 0.0;
     if constexpr (H > 0) {  // most such rows are already zero: reading is cheaper
       bool stale = false;
       for (int c = 0; c < H; ++c) stale = stale || history(r, c) != 0.0;
@@ -265,6 +294,7 @@ KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, cons
     }
     return;
   }
+  if (flagged) flags(r) = 1;
   PairState s;
   pair_geometry(bi, load_body(pv, j, rot), rx, ry, rz, r2, r3, rot, s);
   double h[H > 0 ? H : 1];
@@ -289,13 +319,14 @@ template <class ExecSpace, class Model, class HistoryView, class PairView>
 void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                           const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                           const Model& model, const double strain_rate[3], double dt,
-                          bool thread_per_particle) {
+                          bool thread_per_particle, const RowFlags<ExecSpace>& flags = {}) {
   const ParticleViews<ExecSpace> pv(p);
   auto offsets = nl.offsets(), neighbors = nl.neighbors();
   auto owned_end = nl.owned_end(), pair_begin = nl.pair_begin(), pair_owner = nl.pair_owner();
   const PeriodicBox b = box;
   const Model m = model;
   const double rate[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
+  const bool flagged = flags.extent(0) > 0;
   if (thread_per_particle) {
     Kokkos::parallel_for(
         "dem::compute_forces::contacts_by_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
@@ -304,7 +335,8 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
           const Body bi = load_body(pv, i, Model::rotations);
           const int row0 = pair_begin(i) - offsets(i);
           for (int k = offsets(i); k < owned_end(i); ++k)
-            contact_row(pv, b, m, bi, neighbors(k), row0 + k, history, pair, r3, dt);
+            contact_row(pv, b, m, bi, neighbors(k), row0 + k, history, pair, flags, flagged, r3,
+                        dt);
         });
     return;
   }
@@ -315,7 +347,7 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
         const int i = pair_owner(r);
         const int k = offsets(i) + r - pair_begin(i);  // the owner's list entry
         contact_row(pv, b, m, load_body(pv, i, Model::rotations), neighbors(k), r, history, pair,
-                    r3, dt);
+                    flags, flagged, r3, dt);
       });
 }
 
@@ -726,7 +758,8 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
                     const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                     const Model& model, const Damping& damping, const double strain_rate[3],
                     double dt, bool two_pass, const NearRows& near, NearMode near_mode,
-                    bool batched = true, bool thread_per_particle = false, bool started = false) {
+                    bool batched = true, bool thread_per_particle = false, bool started = false,
+                    const RowFlags<ExecSpace>& flags = {}) {
   if (!two_pass) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
       compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, near, near_mode,
@@ -734,9 +767,10 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
       return;
     }
   }
-  compute_contact_rows(p, nl, history, pair, box, model, strain_rate, dt, thread_per_particle);
+  compute_contact_rows(p, nl, history, pair, box, model, strain_rate, dt, thread_per_particle,
+                       flags);
   gather_contact_forces<ExecSpace, Model>(p, nl, pair, damping, nl.pair_begin(), nl.pair_row(),
-                                          "dem::compute_forces::gather_rows");
+                                          "dem::compute_forces::gather_rows", flags);
 }
 
 }  // namespace granular

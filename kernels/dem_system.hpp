@@ -43,8 +43,12 @@ struct DemParams {
                                   // evaluation use it; false: contact by contact (tests)
   bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
                                              // contacts (the earlier mapping, for comparison)
-  int force_slabs = 0;      // host one-pass kernel: slabs along z (0: default_force_slabs(),
-                            // six; a third of them run at once, see NeighborList::set_partition)
+  bool flag_apart_rows = true;   // two-pass kernel: an apart pair marks a byte instead of writing
+                                 // a zero row, and the gather skips its row (the same bits)
+  bool kick_drift_teams = true;  // devices: the kick-drift's displacement maximum reduced by
+                                 // teams, not by Kokkos' range reduction (the same result)
+  int force_slabs = 0;           // host one-pass kernel: slabs along z (0: default_force_slabs(),
+                        // six; a third of them run at once, see NeighborList::set_partition)
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
   // the owned entries within this gap of touching, read instead of the whole rows while no
@@ -122,8 +126,8 @@ class DemSystem {
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
     for (long s = 0; s < n; ++s) {
-      const double max_sq =
-          kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed());
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp,
+                                             near.drift_speed(), params_.kick_drift_teams);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) {
         rebuild();  // permutes f and torque with the particles
@@ -302,6 +306,11 @@ class DemSystem {
   void set_near_skin(double skin) { params_.near_skin = skin; }
   // The near list's stream on or off mid-run (DemParams::near_stream; the same bits).
   void set_near_stream(bool on) { params_.near_stream = on; }
+  // The two-pass kernel's flagged apart rows on or off mid-run (DemParams::flag_apart_rows;
+  // the same bits).
+  void set_flag_apart_rows(bool on) { params_.flag_apart_rows = on; }
+  // The device kick-drift's team reduction on or off mid-run (DemParams::kick_drift_teams).
+  void set_kick_drift_teams(bool on) { params_.kick_drift_teams = on; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   void set_clock(double t, long steps) {
@@ -381,12 +390,18 @@ class DemSystem {
     nl_.keep_pair_index(needed && !by_entry);
     if (!needed) {
       pair_ = pair_view();
+      row_flags_ = RowFlags<ExecSpace>();
       return;
     }
     constexpr int nb = Model::rotations ? 9 : 3;
     const size_t rows = by_entry ? nl_.num_entries() : nl_.num_pairs();
     if (pair_.extent(0) < rows || pair_.extent(0) == 0)
       pair_ = pair_view("dem::pair_forces", rows + rows / 8 + 16, nb);
+    if (by_entry)
+      row_flags_ = RowFlags<ExecSpace>();
+    else if (row_flags_.extent(0) != pair_.extent(0))
+      row_flags_ = RowFlags<ExecSpace>(
+          Kokkos::view_alloc(Kokkos::WithoutInitializing, "dem::pair_row_flags"), pair_.extent(0));
   }
 
   bool rebuild_due(double max_sq) const {
@@ -482,7 +497,8 @@ class DemSystem {
     }
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
                    two_pass(), near_rows(tracked), near, params_.batched_contacts,
-                   params_.contact_thread_per_particle, started);
+                   params_.contact_thread_per_particle, started,
+                   params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>());
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
                           params_.gravity, dt);
@@ -507,8 +523,8 @@ class DemSystem {
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
-      const double max_sq =
-          kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp, near.drift_speed());
+      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp,
+                                             near.drift_speed(), params_.kick_drift_teams);
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);
@@ -569,6 +585,7 @@ class DemSystem {
   bool external_ = false;  // walls or gravity: one more pass over the particles per step
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both
+  RowFlags<ExecSpace> row_flags_;  // pair rows: whether the contact touched (flag_apart_rows)
   MultiContactForces<ExecSpace> mc_;
   using int_view = Kokkos::View<int*, typename ExecSpace::memory_space>;
   int_view near_k_, near_count_;  // the near list's rows (host one-pass kernel)

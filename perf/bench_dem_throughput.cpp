@@ -5,8 +5,9 @@
 //   bench_dem_throughput --kokkos-threads=2 [--sizes 4096,32768] [--reps 3] [--steps 2000]
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
-//                        [--near-skin S] [--alternate batch|near|stream|skin [--block B]]
-//                        [--skin-b S]
+//                        [--near-skin S]
+//                        [--alternate batch|near|stream|skin|rows|teams [--block B]]
+//                        [--skin-b S] [--zero-rows] [--range-reduce]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
@@ -19,6 +20,10 @@
 // blocks): an A/B comparison whose two sides share the machine's slow phases, for changes
 // smaller than the spread between runs. --alternate skin alternates the near skin between
 // --near-skin (A) and --skin-b (B).
+// --alternate rows: the two-pass kernel's flagged apart rows (A) against zero rows (B);
+// --alternate teams: the device kick-drift's team reduction (A) against Kokkos' range
+// reduction (B). --zero-rows / --range-reduce: the B sides for the whole run
+// (DemParams::flag_apart_rows, kick_drift_teams; the same bits).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -108,7 +113,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
-    bool triad = true, batched = true, per_particle = false;
+    bool triad = true, batched = true, per_particle = false, flagged = true, teams = true;
     std::string alternate;
     long block = 100;
     double near_skin = DemParams{}.near_skin, skin_b = 0.0;
@@ -148,6 +153,10 @@ int main(int argc, char** argv) {
         skin_b = std::stod(next());
       else if (a == "--block")
         block = std::stol(next());
+      else if (a == "--zero-rows")
+        flagged = false;
+      else if (a == "--range-reduce")
+        teams = false;
       else if (a == "--thread-per-particle")
         per_particle = true;
       else if (a == "--slabs")
@@ -160,8 +169,10 @@ int main(int argc, char** argv) {
       }
     }
     if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
-        alternate != "stream" && alternate != "skin") {
-      std::cerr << "--alternate takes batch, near, stream or skin, not " << alternate << "\n";
+        alternate != "stream" && alternate != "skin" && alternate != "rows" &&
+        alternate != "teams") {
+      std::cerr << "--alternate takes batch, near, stream, skin, rows or teams, not " << alternate
+                << "\n";
       return 2;
     }
     if (block < 1) {
@@ -229,6 +240,8 @@ int main(int argc, char** argv) {
             prm.batched_contacts = batched;
             prm.near_skin = near_skin;
             prm.contact_thread_per_particle = per_particle;
+            prm.flag_apart_rows = flagged;
+            prm.kick_drift_teams = teams;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
@@ -270,6 +283,10 @@ int main(int argc, char** argv) {
                     sys.set_near_stream(on);
                   else if (alternate == "skin")
                     sys.set_near_skin(on ? near_skin : skin_b);
+                  else if (alternate == "rows")
+                    sys.set_flag_apart_rows(on);
+                  else if (alternate == "teams")
+                    sys.set_kick_drift_teams(on);
                   else
                     sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
@@ -284,6 +301,8 @@ int main(int argc, char** argv) {
               sys.set_batched_contacts(batched);
               sys.set_near_skin(near_skin);
               sys.set_near_stream(true);
+              sys.set_flag_apart_rows(flagged);
+              sys.set_kick_drift_teams(teams);
               std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
                         << " on/off rate ratio, median of " << ratio.size() << " block pairs "
                         << median(ratio) << ", of the sums " << t_off / t_on << "\n";
@@ -319,14 +338,19 @@ int main(int argc, char** argv) {
             // written, zeros included; per contact the partner's other fields and the history
             // written; with a thread per contact, each also reads its row's owner. Gather pass: the
             // owned rows read, per other entry the partner's row index and the row, then v, w read
-            // and f, torque written.
+            // and f, torque written. Flagged rows (DemParams::flag_apart_rows): each entry's row
+            // becomes its byte, and only the touching contacts' rows are written and read (z_end/2
+            // per particle on each side of a contact).
             const double row = 8 * (3 + 6 * R);
             // (The owner's state and offsets, read again by each of its contacts' threads,
             // come from cache: counted once, as for a thread per particle.)
             const double owner = body_i + 8 + (per_particle ? 0.0 : owned * 4);
-            force_bytes = owner + owned * (4 + 24 + 8 + 8 * H + row) +
-                          contacts * (body_j_rest + 8 * H) + (24 + 24 * R) + 16 + owned * row +
-                          (nb - owned) * (4 + row) + 24 * (1 + R);
+            const double entry_row = flagged ? 1.0 : row;  // per entry, touching or not
+            const double touch_row = flagged ? row : 0.0;  // per touching contact, each side
+            force_bytes = owner + owned * (4 + 24 + 8 + 8 * H + entry_row) +
+                          contacts * (body_j_rest + 8 * H + touch_row) + (24 + 24 * R) + 16 +
+                          owned * entry_row + (nb - owned) * (4 + entry_row) +
+                          2 * contacts * touch_row + 24 * (1 + R);
           }
           // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
           // written): the closing kick of each step is deferred into the next one.
@@ -355,7 +379,12 @@ int main(int argc, char** argv) {
           row["neighbor_builds_in_timed_window"] = builds;
           row["near_list_recordings_in_timed_window"] = near_recordings;
           row["near_list_reads_in_timed_window"] = near_reads;
-          if (forces_by_slabs<Exec>()) row["force_slabs"] = slabs_used;
+          if (forces_by_slabs<Exec>())
+            row["force_slabs"] = slabs_used;
+          else {
+            row["flag_apart_rows"] = flagged;
+            row["kick_drift_teams"] = teams;
+          }
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;
           if (!alternated.empty()) {

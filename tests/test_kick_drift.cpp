@@ -4,6 +4,9 @@
 // drift speed, for every combination of the pass's switches, with particles wrapped through
 // periodic faces in both directions, displacements folded by the minimum image, a NaN
 // velocity, and particle counts that leave a tail of one to three after the last whole four.
+// And the pass written with Kokkos' loops (kick_drift_kokkos, the devices' pass) with its
+// displacement maximum reduced by teams and by Kokkos' range reduction, against kick_drift
+// on every backend: the same bits and the same maximum.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "core/rng.hpp"
+#include "exec_spaces.hpp"
 #include "kernels/integrator.hpp"
 #include "test_support.hpp"
 
@@ -101,4 +105,86 @@ TEST(KickDriftTest, FourParticlesAtATimeGiveTheBitsOfTheParticleByParticlePass) 
         compare<true, false>(n, pending, damp);
         compare<true, true>(n, pending, damp);
       }
+}
+
+namespace {
+
+template <class Exec>
+std::vector<double> host_vec(const typename Particles<Exec>::vec_view& v) {
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+  return std::vector<double>(h.data(), h.data() + h.size());
+}
+
+// n particles in a 10 x 10 x 10 box (periodic along x and z), a third about to leave through a
+// face, every one's reference position drawn near it, a few across the box; the largest
+// displacement belongs to the particle `far` (the last one of the pass unless told).
+template <class Exec>
+Particles<Exec> drifting(int n, int far, typename Particles<Exec>::vec_view& x_ref) {
+  Particles<Exec> p(n);
+  auto x = Kokkos::create_mirror_view(p.x), v = Kokkos::create_mirror_view(p.v);
+  auto f = Kokkos::create_mirror_view(p.f), w = Kokkos::create_mirror_view(p.w);
+  auto q = Kokkos::create_mirror_view(p.torque), r = Kokkos::create_mirror_view(x_ref);
+  auto m = Kokkos::create_mirror_view(p.mass), in = Kokkos::create_mirror_view(p.inertia);
+  for (int i = 0; i < n; ++i) {
+    Stream s(77, i);
+    m(i) = s.uniform(0.5, 2.0), in(i) = s.uniform(0.05, 0.3);
+    for (int d = 0; d < 3; ++d) {
+      x(i, d) = s.uniform(0.0, 10.0), v(i, d) = s.uniform(-1.0, 1.0);
+      if (i % 3 == 0) x(i, d) = (i % 2) ? 9.9999 : 1e-5, v(i, d) = (i % 2) ? 1.0 : -1.0;
+      f(i, d) = s.uniform(-5.0, 5.0), w(i, d) = s.uniform(-2.0, 2.0);
+      q(i, d) = s.uniform(-1.0, 1.0);
+      r(i, d) = x(i, d) + s.uniform(-0.01, 0.01);
+      if (i % 7 == 0 && i % 3 != 0 && d != 1) r(i, d) = x(i, d) + 6.0;  // folded to 4
+    }
+  }
+  for (int d = 0; d < 3; ++d) r(far, d) = x(far, d) + (d == 1 ? 3.0 : 4.5);
+  Kokkos::deep_copy(p.x, x), Kokkos::deep_copy(p.v, v), Kokkos::deep_copy(p.f, f);
+  Kokkos::deep_copy(p.w, w), Kokkos::deep_copy(p.torque, q), Kokkos::deep_copy(x_ref, r);
+  Kokkos::deep_copy(p.mass, m), Kokkos::deep_copy(p.inertia, in);
+  return p;
+}
+
+}  // namespace
+
+template <class T>
+class KickDriftKokkosTest : public ::testing::Test {};
+TYPED_TEST_SUITE(KickDriftKokkosTest, granular::testing::ExecSpaces);
+
+TYPED_TEST(KickDriftKokkosTest, TeamReductionGivesTheBitsAndMaximumOfTheRangeReductionAndThePass) {
+  using Exec = TypeParam;
+  using P = Particles<Exec>;
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = 10.0, box.periodic[d] = d != 1;
+  DampingStart ds;
+  ds.translational = 0.7, ds.rotational = 0.3;
+  // Counts below, at and past one team of 128; the farthest particle first, inside, last.
+  for (const int n : {1, 127, 128, 129, 1000, 5003})
+    for (const int far : {0, n / 2, n - 1})
+      for (const bool pending : {false, true})
+        for (const bool damp : {false, true}) {
+          ds.on = damp;
+          typename P::vec_view ra("ra", n), rb("rb", n), rc("rc", n);
+          P a = drifting<Exec>(n, far, ra), b = drifting<Exec>(n, far, rb),
+            c = drifting<Exec>(n, far, rc);
+          const double ma = kick_drift<true>(a, box, ra, 0.05, pending, ds);
+          const double mb = kick_drift_kokkos<true>(b, box, rb, 0.05, pending, ds, true);
+          const double mc = kick_drift_kokkos<true>(c, box, rc, 0.05, pending, ds, false);
+          const std::string what = "n " + std::to_string(n) + " far " + std::to_string(far) +
+                                   " pending " + std::to_string(pending) + " damp " +
+                                   std::to_string(damp);
+          EXPECT_TRUE(bitwise_equal({ma}, {mb})) << what << ": " << ma << " " << mb;
+          EXPECT_TRUE(bitwise_equal({ma}, {mc})) << what << ": " << ma << " " << mc;
+          // The far particle's (about 2 x 4.5^2 + 3^2, give or take its drift), where every
+          // other's is below 2 x 4.1^2.
+          EXPECT_GT(ma, 45.0) << what;
+          EXPECT_LT(ma, 56.0) << what;
+          for (auto* pair : {&b, &c}) {
+            EXPECT_TRUE(bitwise_equal(host_vec<Exec>(a.x), host_vec<Exec>(pair->x))) << what;
+            EXPECT_TRUE(bitwise_equal(host_vec<Exec>(a.v), host_vec<Exec>(pair->v))) << what;
+            EXPECT_TRUE(bitwise_equal(host_vec<Exec>(a.f), host_vec<Exec>(pair->f))) << what;
+            EXPECT_TRUE(bitwise_equal(host_vec<Exec>(a.w), host_vec<Exec>(pair->w))) << what;
+            EXPECT_TRUE(bitwise_equal(host_vec<Exec>(a.torque), host_vec<Exec>(pair->torque)))
+                << what;
+          }
+        }
 }

@@ -4,7 +4,8 @@
 // compressed frictional packing with rolling springs; and the slab partition's invariants
 // that make the scattered writes race-free (every particle in one slab, every listed pair
 // within adjacent slabs, a slab count the three rounds can colour). And the two-pass kernel's
-// two thread mappings (a thread per contact, a thread per particle): the same bits.
+// two thread mappings (a thread per contact, a thread per particle), and its apart contacts
+// flagged (rows left unwritten and unread) or written as zero rows: the same bits.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,8 +16,10 @@
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
+#include "test_support.hpp"
 
 using namespace granular;
+using granular::testing::bitwise_equal;
 
 namespace {
 
@@ -132,6 +135,53 @@ TYPED_TEST(SlabForcesTest, TwoPassKernelGivesTheSameBitsWithAThreadPerContactOrP
   EXPECT_EQ(host_copy<Exec>(a.particles().x), host_copy<Exec>(b.particles().x));
   EXPECT_EQ(host_copy<Exec>(a.particles().w), host_copy<Exec>(b.particles().w));
   EXPECT_GT(max_abs(host_copy<Exec>(a.particles().torque)), 0.0);
+}
+
+namespace {
+
+// Two-pass kernel with flagged apart rows (a), zero rows (b), and the two in turn every
+// 150 steps (c): the same bits of forces, torques, positions and spins after compression
+// through several rebuilds.
+template <class Exec, class Model>
+void compare_flagged_and_zero_rows(const Model& model) {
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 2500, 0.35);
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 100;
+  prm.damping.rotational = 20;
+  prm.two_pass_forces = true;
+  DemParams zero = prm;
+  zero.flag_apart_rows = false;
+  DemSystem<Exec, Model> a(Particles<Exec>::from_host(h), box, model, prm);
+  DemSystem<Exec, Model> b(Particles<Exec>::from_host(h), box, model, zero);
+  DemSystem<Exec, Model> c(Particles<Exec>::from_host(h), box, model, prm);
+  for (auto* s : {&a, &b, &c}) s->set_strain_rate(-3e-2, -3e-2, -3e-2);  // to phi ~ 0.65
+  a.step(1800);
+  b.step(1800);
+  for (int k = 0; k < 12; ++k) {
+    c.set_flag_apart_rows(k % 2 == 1);
+    c.step(150);
+  }
+  const long contacts = a.measure().contacts;
+  ASSERT_GT(contacts, a.particles().n) << "too few contacts for the comparison";
+  ASSERT_GT(a.neighbor_list().builds(), 2);
+  // Rows the flags skip: listed pairs that are apart (a tenth of the list at least).
+  ASSERT_GT(a.neighbor_list().num_pairs(), contacts + contacts / 10);
+  for (auto* s : {&b, &c}) {
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().f), host_copy<Exec>(s->particles().f)));
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().torque),
+                              host_copy<Exec>(s->particles().torque)));
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().x), host_copy<Exec>(s->particles().x)));
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().w), host_copy<Exec>(s->particles().w)));
+  }
+}
+
+}  // namespace
+
+TYPED_TEST(SlabForcesTest, TwoPassKernelGivesTheSameBitsWithFlaggedApartRowsOrZeroRows) {
+  compare_flagged_and_zero_rows<TypeParam>(rolling_model());
+  compare_flagged_and_zero_rows<TypeParam>(
+      ContactModel<LinearNormal>{LinearNormal::uniform(1e5, 1000)});
 }
 
 TYPED_TEST(SlabForcesTest, SlabsPartitionTheParticlesAndEveryListedPairJoinsAdjacentSlabs) {
