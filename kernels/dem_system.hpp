@@ -43,11 +43,11 @@ struct DemParams {
                                   // evaluation use it; false: contact by contact (tests)
   bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
                                              // contacts (the earlier mapping, for comparison)
-  bool flag_apart_rows = true;   // two-pass kernel: an apart pair marks a byte instead of writing
-                                 // a zero row, and the gather skips its row (the same bits)
-  bool kick_drift_teams = true;  // devices: the kick-drift's displacement maximum reduced by
-                                 // teams, not by Kokkos' range reduction (the same result)
-  int force_slabs = 0;           // host one-pass kernel: slabs along z (0: default_force_slabs(),
+  bool flag_apart_rows = true;  // two-pass kernel, laws with rotations (rows of 9 doubles): an
+                                // apart pair marks a byte instead of writing a zero row, and the
+                                // gather skips its row (the same bits; the frictionless law's
+                                // rows of 3 doubles cost about what the byte does)
+  int force_slabs = 0;          // host one-pass kernel: slabs along z (0: default_force_slabs(),
                         // six; a third of them run at once, see NeighborList::set_partition)
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
@@ -126,8 +126,8 @@ class DemSystem {
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp,
-                                             near.drift_speed(), params_.kick_drift_teams);
+      const double max_sq =
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed());
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) {
         rebuild();  // permutes f and torque with the particles
@@ -309,8 +309,6 @@ class DemSystem {
   // The two-pass kernel's flagged apart rows on or off mid-run (DemParams::flag_apart_rows;
   // the same bits).
   void set_flag_apart_rows(bool on) { params_.flag_apart_rows = on; }
-  // The device kick-drift's team reduction on or off mid-run (DemParams::kick_drift_teams).
-  void set_kick_drift_teams(bool on) { params_.kick_drift_teams = on; }
   double time() const { return time_; }
   long steps() const { return steps_; }
   void set_clock(double t, long steps) {
@@ -397,7 +395,7 @@ class DemSystem {
     const size_t rows = by_entry ? nl_.num_entries() : nl_.num_pairs();
     if (pair_.extent(0) < rows || pair_.extent(0) == 0)
       pair_ = pair_view("dem::pair_forces", rows + rows / 8 + 16, nb);
-    if (by_entry)
+    if (by_entry || !Model::rotations)
       row_flags_ = RowFlags<ExecSpace>();
     else if (row_flags_.extent(0) != pair_.extent(0))
       row_flags_ = RowFlags<ExecSpace>(
@@ -523,8 +521,8 @@ class DemSystem {
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
-      const double max_sq = kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp,
-                                             near.drift_speed(), params_.kick_drift_teams);
+      const double max_sq =
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp, near.drift_speed());
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);

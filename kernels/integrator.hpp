@@ -214,19 +214,19 @@ struct DriftSpeed {
 };
 
 // kick_drift's pass written with Kokkos' loops, for devices (any backend runs it: tests
-// compare it with the host rows). `team_reduce`: the displacement maximum by teams (below)
-// or by a range reduction.
+// compare it with the host rows). A team reduction (a block per 128 particles, where Kokkos'
+// range reduction launches at most 256 blocks on a device) was slower on an H200: 182 against
+// 121 us per step at N = 1M (perf/README.md, design note on the GPU).
 template <bool Rotations, class ExecSpace>
 double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
                          const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
-                         bool pending, DampingStart damp, bool team_reduce) {
+                         bool pending, DampingStart damp) {
   auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
   auto mass = p.mass, inertia = p.inertia;
   const PeriodicBox b = box;
   const bool start = damp.on;
   const double gb = damp.translational, gr = damp.rotational;
   double max_sq = 0.0;
-  // One particle, folded into the running maximum m.
   auto one = KOKKOS_LAMBDA(const int i, double& m) {
     const double h = 0.5 * dt / mass(i);
     double d2 = 0.0;
@@ -251,30 +251,8 @@ double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
     }
     m = d2 > m ? d2 : m;
   };
-  if (!team_reduce) {  // the range reduction (kept to measure the difference)
-    Kokkos::parallel_reduce("dem::VelocityVerlet::kick_drift",
-                            Kokkos::RangePolicy<ExecSpace>(0, p.n), one,
-                            Kokkos::Max<double>(max_sq));
-    return max_sq;
-  }
-  // Teams of kTeam particles: Kokkos' range reduction launches at most as many blocks on a
-  // device as a block has threads (256 at most, a quarter of an H100's occupancy, each
-  // thread walking 16 particles of N = 1M one after the other); a team reduction launches a
-  // block per team. A maximum is exact in any order: the same result. A host team is one
-  // thread (host teams hold at most as many threads as the pool) over the same particles.
-  constexpr int kTeam = 128;
-  using Policy = Kokkos::TeamPolicy<ExecSpace>;
-  constexpr bool host = std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>;
-  const int n = p.n, teams = (n + kTeam - 1) / kTeam;
-  Kokkos::parallel_reduce(
-      "dem::VelocityVerlet::kick_drift_teams", Policy(teams, host ? 1 : kTeam),
-      KOKKOS_LAMBDA(const typename Policy::member_type& t, double& m) {
-        const int i0 = t.league_rank() * kTeam, i1 = i0 + kTeam < n ? i0 + kTeam : n;
-        double tm = 0.0;
-        Kokkos::parallel_reduce(Kokkos::TeamThreadRange(t, i0, i1), one, Kokkos::Max<double>(tm));
-        m = tm > m ? tm : m;  // every thread of the team: a maximum is idempotent
-      },
-      Kokkos::Max<double>(max_sq));
+  Kokkos::parallel_reduce("dem::VelocityVerlet::kick_drift", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+                          one, Kokkos::Max<double>(max_sq));
   return max_sq;
 }
 
@@ -282,7 +260,7 @@ template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
                   bool pending = false, DampingStart damp = DampingStart(),
-                  DriftSpeed* speed = nullptr, bool team_reduce = true) {
+                  DriftSpeed* speed = nullptr) {
   if constexpr (std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>) {
     const KickDriftRows rows{
         p.x.data(),       p.v.data(),   p.f.data(), p.w.data(), p.torque.data(), p.mass.data(),
@@ -329,7 +307,7 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
     speed->max_v2 = mv;
     return max_sq;
   }
-  return kick_drift_kokkos<Rotations>(p, box, x_ref, dt, pending, damp, team_reduce);
+  return kick_drift_kokkos<Rotations>(p, box, x_ref, dt, pending, damp);
 }
 
 template <bool Rotations, class ExecSpace>

@@ -6,8 +6,8 @@
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
 //                        [--near-skin S]
-//                        [--alternate batch|near|stream|skin|rows|teams [--block B]]
-//                        [--skin-b S] [--zero-rows] [--range-reduce]
+//                        [--alternate batch|near|stream|skin|rows [--block B]]
+//                        [--skin-b S] [--zero-rows]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
@@ -20,10 +20,9 @@
 // blocks): an A/B comparison whose two sides share the machine's slow phases, for changes
 // smaller than the spread between runs. --alternate skin alternates the near skin between
 // --near-skin (A) and --skin-b (B).
-// --alternate rows: the two-pass kernel's flagged apart rows (A) against zero rows (B);
-// --alternate teams: the device kick-drift's team reduction (A) against Kokkos' range
-// reduction (B). --zero-rows / --range-reduce: the B sides for the whole run
-// (DemParams::flag_apart_rows, kick_drift_teams; the same bits).
+// --alternate rows: the two-pass kernel's flagged apart rows (A) against zero rows (B), laws
+// with rotations; --zero-rows: zero rows for the whole run (DemParams::flag_apart_rows; the
+// same bits).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -113,7 +112,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
-    bool triad = true, batched = true, per_particle = false, flagged = true, teams = true;
+    bool triad = true, batched = true, per_particle = false, flagged = true;
     std::string alternate;
     long block = 100;
     double near_skin = DemParams{}.near_skin, skin_b = 0.0;
@@ -155,8 +154,6 @@ int main(int argc, char** argv) {
         block = std::stol(next());
       else if (a == "--zero-rows")
         flagged = false;
-      else if (a == "--range-reduce")
-        teams = false;
       else if (a == "--thread-per-particle")
         per_particle = true;
       else if (a == "--slabs")
@@ -169,10 +166,8 @@ int main(int argc, char** argv) {
       }
     }
     if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
-        alternate != "stream" && alternate != "skin" && alternate != "rows" &&
-        alternate != "teams") {
-      std::cerr << "--alternate takes batch, near, stream, skin, rows or teams, not " << alternate
-                << "\n";
+        alternate != "stream" && alternate != "skin" && alternate != "rows") {
+      std::cerr << "--alternate takes batch, near, stream, skin or rows, not " << alternate << "\n";
       return 2;
     }
     if (block < 1) {
@@ -241,7 +236,6 @@ int main(int argc, char** argv) {
             prm.near_skin = near_skin;
             prm.contact_thread_per_particle = per_particle;
             prm.flag_apart_rows = flagged;
-            prm.kick_drift_teams = teams;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
@@ -285,8 +279,6 @@ int main(int argc, char** argv) {
                     sys.set_near_skin(on ? near_skin : skin_b);
                   else if (alternate == "rows")
                     sys.set_flag_apart_rows(on);
-                  else if (alternate == "teams")
-                    sys.set_kick_drift_teams(on);
                   else
                     sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
@@ -302,7 +294,6 @@ int main(int argc, char** argv) {
               sys.set_near_skin(near_skin);
               sys.set_near_stream(true);
               sys.set_flag_apart_rows(flagged);
-              sys.set_kick_drift_teams(teams);
               std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
                         << " on/off rate ratio, median of " << ratio.size() << " block pairs "
                         << median(ratio) << ", of the sums " << t_off / t_on << "\n";
@@ -338,15 +329,17 @@ int main(int argc, char** argv) {
             // written, zeros included; per contact the partner's other fields and the history
             // written; with a thread per contact, each also reads its row's owner. Gather pass: the
             // owned rows read, per other entry the partner's row index and the row, then v, w read
-            // and f, torque written. Flagged rows (DemParams::flag_apart_rows): each entry's row
+            // and f, torque written. Flagged rows (DemParams::flag_apart_rows, laws with
+            // rotations): each entry's row
             // becomes its byte, and only the touching contacts' rows are written and read (z_end/2
             // per particle on each side of a contact).
             const double row = 8 * (3 + 6 * R);
             // (The owner's state and offsets, read again by each of its contacts' threads,
             // come from cache: counted once, as for a thread per particle.)
             const double owner = body_i + 8 + (per_particle ? 0.0 : owned * 4);
-            const double entry_row = flagged ? 1.0 : row;  // per entry, touching or not
-            const double touch_row = flagged ? row : 0.0;  // per touching contact, each side
+            const bool flags = flagged && Model::rotations;
+            const double entry_row = flags ? 1.0 : row;  // per entry, touching or not
+            const double touch_row = flags ? row : 0.0;  // per touching contact, each side
             force_bytes = owner + owned * (4 + 24 + 8 + 8 * H + entry_row) +
                           contacts * (body_j_rest + 8 * H + touch_row) + (24 + 24 * R) + 16 +
                           owned * entry_row + (nb - owned) * (4 + entry_row) +
@@ -382,8 +375,7 @@ int main(int argc, char** argv) {
           if (forces_by_slabs<Exec>())
             row["force_slabs"] = slabs_used;
           else {
-            row["flag_apart_rows"] = flagged;
-            row["kick_drift_teams"] = teams;
+            row["flag_apart_rows"] = flagged && Model::rotations;
           }
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;
