@@ -213,21 +213,19 @@ struct DriftSpeed {
   std::vector<double> block;  // per block of the pass (kept: no allocation per step)
 };
 
-// kick_drift's pass written with Kokkos' loops, for devices (any backend runs it: tests
-// compare it with the host rows). A team reduction (a block per 128 particles, where Kokkos'
-// range reduction launches at most 256 blocks on a device) was slower on an H200: 182 against
-// 121 us per step at N = 1M (perf/README.md, design note on the GPU).
+// kick_drift's pass for devices, one particle per call, folding its squared displacement
+// into the running maximum m. A functor, not a lambda: written as a KOKKOS_LAMBDA inside the
+// pass, its launch called a null pointer on an H200 (CUDA 13) in three test programs (the
+// lambda's host-device wrapper, in the invoker of the reduction's kernel; other programs
+// ran the same pass), while an ordinary class is the same type in every translation unit.
 template <bool Rotations, class ExecSpace>
-double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
-                         const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
-                         bool pending, DampingStart damp) {
-  auto x = p.x, v = p.v, f = p.f, w = p.w, q = p.torque;
-  auto mass = p.mass, inertia = p.inertia;
-  const PeriodicBox b = box;
-  const bool start = damp.on;
-  const double gb = damp.translational, gr = damp.rotational;
-  double max_sq = 0.0;
-  auto one = KOKKOS_LAMBDA(const int i, double& m) {
+struct KickDriftPass {
+  typename Particles<ExecSpace>::vec_view x, v, f, w, q, x_ref;
+  typename Particles<ExecSpace>::scalar_view mass, inertia;
+  PeriodicBox b;
+  double dt, gb, gr;
+  bool pending, start;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, double& m) const {
     const double h = 0.5 * dt / mass(i);
     double d2 = 0.0;
     for (int d = 0; d < 3; ++d) {
@@ -250,9 +248,24 @@ double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
       }
     }
     m = d2 > m ? d2 : m;
-  };
+  }
+};
+
+// The pass above over every particle (any backend runs it: tests compare it with the host
+// rows). A team reduction (a block per 128 particles, where Kokkos' range reduction launches
+// at most 256 blocks on a device) was slower on an H200: 182 against 121 us per step at
+// N = 1M (perf/README.md, design note on the GPU).
+template <bool Rotations, class ExecSpace>
+double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
+                         const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
+                         bool pending, DampingStart damp) {
+  const KickDriftPass<Rotations, ExecSpace> pass{
+      p.x,     p.v,       p.f, p.w, p.torque,           x_ref,
+      p.mass,  p.inertia, box, dt,  damp.translational, damp.rotational,
+      pending, damp.on};
+  double max_sq = 0.0;
   Kokkos::parallel_reduce("dem::VelocityVerlet::kick_drift", Kokkos::RangePolicy<ExecSpace>(0, p.n),
-                          one, Kokkos::Max<double>(max_sq));
+                          pass, Kokkos::Max<double>(max_sq));
   return max_sq;
 }
 
