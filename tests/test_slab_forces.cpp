@@ -54,6 +54,16 @@ double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) 
   return m;
 }
 
+// The two-pass kernel's comparisons: a damped gas compressed to phi ~ 0.65 (with
+// set_strain_rate), through several neighbour rebuilds.
+DemParams two_pass_params() {
+  DemParams prm;
+  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 100;
+  prm.damping.rotational = 20;
+  prm.two_pass_forces = true;
+  return prm;
+}
+
 }  // namespace
 
 template <class T>
@@ -114,10 +124,7 @@ TYPED_TEST(SlabForcesTest, TwoPassKernelGivesTheSameBitsWithAThreadPerContactOrP
   using Exec = TypeParam;
   PeriodicBox box;
   const HostParticles h = small_gas(box, 2500, 0.35);
-  DemParams prm;
-  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 100;
-  prm.damping.rotational = 20;
-  prm.two_pass_forces = true;
+  const DemParams prm = two_pass_params();
   DemParams per_particle = prm;
   per_particle.contact_thread_per_particle = true;
   DemSystem<Exec, RollingModel> a(Particles<Exec>::from_host(h), box, rolling_model(), prm);
@@ -146,10 +153,7 @@ template <class Exec, class Model>
 void compare_flagged_and_zero_rows(const Model& model) {
   PeriodicBox box;
   const HostParticles h = small_gas(box, 2500, 0.35);
-  DemParams prm;
-  prm.dt = 0.004, prm.skin = 0.1, prm.damping.translational = 100;
-  prm.damping.rotational = 20;
-  prm.two_pass_forces = true;
+  const DemParams prm = two_pass_params();
   DemParams zero = prm;
   zero.flag_apart_rows = false;
   DemSystem<Exec, Model> a(Particles<Exec>::from_host(h), box, model, prm);
