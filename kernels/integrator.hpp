@@ -214,10 +214,12 @@ struct DriftSpeed {
 };
 
 // kick_drift's pass for devices, one particle per call, folding its squared displacement
-// into the running maximum m. A functor, not a lambda: written as a KOKKOS_LAMBDA inside the
-// pass, its launch called a null pointer on an H200 (CUDA 13) in three test programs (the
-// lambda's host-device wrapper, in the invoker of the reduction's kernel; other programs
-// ran the same pass), while an ordinary class is the same type in every translation unit.
+// into the running maximum m. A functor, not a lambda: written as a KOKKOS_LAMBDA, its
+// launch called a null pointer on an H200 (CUDA 13) in some tests and not in others. nvcc
+// gives the wrapper of a host-device lambda a copy helper private to each translation unit;
+// where the function template holding the lambda is instantiated in several units, the
+// linker can pair the wrapper's code from one unit with another's helper, left null. An
+// ordinary class has no such helper.
 template <bool Rotations, class ExecSpace>
 struct KickDriftPass {
   typename Particles<ExecSpace>::vec_view x, v, f, w, q, x_ref;
