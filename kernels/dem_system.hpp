@@ -43,12 +43,12 @@ struct DemParams {
                                   // evaluation use it; false: contact by contact (tests)
   bool contact_thread_per_particle = false;  // two-pass kernel: one thread per particle over its
                                              // contacts (the earlier mapping, for comparison)
-  bool flag_apart_rows = true;  // two-pass kernel, laws with rotations (rows of 9 doubles): an
-                                // apart pair marks a byte instead of writing a zero row, and the
-                                // gather skips its row (the same bits; the frictionless law's
-                                // rows of 3 doubles cost about what the byte does)
-  int force_slabs = 0;          // host one-pass kernel: slabs along z (0: default_force_slabs(),
-                        // six; a third of them run at once, see NeighborList::set_partition)
+  // Two-pass kernel, laws with rotations (rows of 9 doubles): an apart pair marks a byte
+  // instead of writing a zero row, and the gather skips its row (the same bits; the
+  // frictionless law's rows of 3 doubles cost about what the byte does).
+  bool flag_apart_rows = true;
+  int force_slabs = 0;      // host one-pass kernel: slabs along z (0: default_force_slabs(),
+                            // six; a third of them run at once, see NeighborList::set_partition)
   int cell_block_rows = 4;  // cell order: height of the blocks of cell rows a slab is swept in
   // Host one-pass kernel: the skin of the near list (NearRows in kernels/contact_forces.hpp),
   // the owned entries within this gap of touching, read instead of the whole rows while no
