@@ -311,6 +311,8 @@ int main(int argc, char** argv) {
           // (each access once; neighbour data that hits cache still counts). Per particle:
           // nb full-list entries, nb/2 of them owned, z_end/2 owned contacts.
           constexpr double H = Model::history, R = Model::rotations ? 1.0 : 0.0;
+          // DemSystem flags apart rows only for laws with rotations (DemParams::flag_apart_rows).
+          const bool flags = flagged && Model::rotations;
           const double nb = entries / n, owned = nb / 2, contacts = z_end / 2;
           const double body_i = 24 + 24 + 24 * R + 8 + 8 + 4;  // x, v, w, radius, mass, species
           const double body_j_rest = 24 + 24 * R + 8 + 4;      // v, w, mass, species of a partner
@@ -329,15 +331,13 @@ int main(int argc, char** argv) {
             // written, zeros included; per contact the partner's other fields and the history
             // written; with a thread per contact, each also reads its row's owner. Gather pass: the
             // owned rows read, per other entry the partner's row index and the row, then v, w read
-            // and f, torque written. Flagged rows (DemParams::flag_apart_rows, laws with
-            // rotations): each entry's row
-            // becomes its byte, and only the touching contacts' rows are written and read (z_end/2
-            // per particle on each side of a contact).
+            // and f, torque written. Flagged rows: each entry's row becomes its byte, and only
+            // the touching contacts' rows are written and read (z_end/2 per particle on each
+            // side of a contact).
             const double row = 8 * (3 + 6 * R);
             // (The owner's state and offsets, read again by each of its contacts' threads,
             // come from cache: counted once, as for a thread per particle.)
             const double owner = body_i + 8 + (per_particle ? 0.0 : owned * 4);
-            const bool flags = flagged && Model::rotations;
             const double entry_row = flags ? 1.0 : row;  // per entry, touching or not
             const double touch_row = flags ? row : 0.0;  // per touching contact, each side
             force_bytes = owner + owned * (4 + 24 + 8 + 8 * H + entry_row) +
@@ -374,9 +374,8 @@ int main(int argc, char** argv) {
           row["near_list_reads_in_timed_window"] = near_reads;
           if (forces_by_slabs<Exec>())
             row["force_slabs"] = slabs_used;
-          else {
-            row["flag_apart_rows"] = flagged && Model::rotations;
-          }
+          else
+            row["flag_apart_rows"] = flags;
           row["particle_steps_per_s"] = rates;
           row["median_particle_steps_per_s"] = med;
           if (!alternated.empty()) {

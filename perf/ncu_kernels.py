@@ -19,6 +19,7 @@ GROUPS = [
     ("contacts", "compute_contact_rows"),
     ("gather", "gather_contact_forces"),
     ("kick_drift", "kick_drift"),
+    ("kick_drift", "KickDriftPass"),  # the pass as a functor class: its name, not its function's
     ("kick", "kick<"),
 ]
 SCALE = {"": 1.0, "byte": 1.0, "Kbyte": 1e3, "Mbyte": 1e6, "Gbyte": 1e9,
