@@ -644,15 +644,21 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
         const int *sb = st->begin.data(), *se = st->empty.data(), *eb = st->empty_begin.data();
         const LinearNormal::Params pn = m.normal.table(0, 0);
         const CoulombTangential::Params pt = m.tangential.table(0, 0);
+        const double* const pack = nr.pack;
         ++st->reads;
+        st->packed_reads += pack != nullptr;
         for (int r = 0; r < rounds; ++r) {
           const int tasks = (slabs - r + rounds - 1) / rounds;
-          Kokkos::parallel_for("dem::compute_forces::near_stream", Policy(0, tasks),
-                               [=](const int t) {
-                                 const int s = t * rounds + r;
-                                 near_stream_slab(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se,
-                                                  eb[s], eb[s + 1], hist, fh, qh, rt, dt);
-                               });
+          Kokkos::parallel_for(
+              "dem::compute_forces::near_stream", Policy(0, tasks), [=](const int t) {
+                const int s = t * rounds + r;
+                if (pack != nullptr)
+                  near_stream_slab<true>(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se, eb[s],
+                                         eb[s + 1], hist, fh, qh, rt, dt, pack);
+                else
+                  near_stream_slab<false>(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se, eb[s],
+                                          eb[s + 1], hist, fh, qh, rt, dt, nullptr);
+              });
         }
         return;
       }

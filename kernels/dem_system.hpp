@@ -6,6 +6,7 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -64,6 +65,11 @@ struct DemParams {
   // set: the near list also recorded as a flat stream of contacts and read four at a time
   // (kernels/near_stream.hpp; the same bits either way).
   bool near_stream = true;
+  // The frictional stream reads each particle's position, radius, velocity and spin from one
+  // packed record of twelve doubles, written by the step's kick-drift pass (ParticlePack in
+  // kernels/near_stream.hpp; two cache lines per partner instead of four, 96 bytes more per
+  // particle; the same bits either way).
+  bool packed_stream = true;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -78,6 +84,7 @@ struct StepProfile {
 struct NearListUse {
   long recordings = 0, reads = 0;
   long stream_reads = 0;  // reads served by the near list's stream (kernels/near_stream.hpp)
+  long packed_reads = 0;  // those of them from the particles' packed records (ParticlePack)
 };
 
 template <class ExecSpace, class Model>
@@ -125,16 +132,17 @@ class DemSystem {
     // arithmetic, one sweep less); the last one is applied before returning.
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
+    double* const pack = near.on ? packed_records() : nullptr;
     for (long s = 0; s < n; ++s) {
       const double max_sq =
-          kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed());
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed(), pack);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) {
         rebuild();  // permutes f and torque with the particles
         near.valid = false;
       }
       walls_.update(time_ + dt);
-      forces(dt, damp.on, near_mode(near), near.on);
+      forces(dt, damp.on, near_mode(near), near.on, pack);
       time_ += dt;
       ++steps_;
     }
@@ -297,6 +305,7 @@ class DemSystem {
   NearListUse near_list_use() const {
     NearListUse u = near_use_;
     u.stream_reads = near_stream_.reads;
+    u.packed_reads = near_stream_.packed_reads;
     return u;
   }
   // The host kernel's contact batch on or off mid-run (the same bits either way): lets a
@@ -306,6 +315,9 @@ class DemSystem {
   void set_near_skin(double skin) { params_.near_skin = skin; }
   // The near list's stream on or off mid-run (DemParams::near_stream; the same bits).
   void set_near_stream(bool on) { params_.near_stream = on; }
+  // The stream's packed particle records on or off mid-run (DemParams::packed_stream; the
+  // same bits).
+  void set_packed_stream(bool on) { params_.packed_stream = on; }
   // The two-pass kernel's flagged apart rows on or off mid-run (DemParams::flag_apart_rows;
   // the same bits).
   void set_flag_apart_rows(bool on) { params_.flag_apart_rows = on; }
@@ -441,6 +453,22 @@ class DemSystem {
     return false;
 #endif
   }
+  // The particles' packed records for the frictional stream (DemParams::packed_stream), sized
+  // for the particles, where this system's force passes may read them; null elsewhere. Written
+  // by each kick-drift pass of a run that tracks the near list, read by the force passes that
+  // take the stream in that run's steps (the drift's values: between the two, a read step
+  // neither strains nor rebuilds).
+  double* packed_records() {
+    if (!params_.packed_stream || !stream_reads() || Model::history == 0 || mc_.active())
+      return nullptr;
+    constexpr long S = ParticlePack::kStride;
+    if (pack_.extent(0) != static_cast<size_t>(S * p_.n))
+      pack_ = pack_view(Kokkos::view_alloc("dem::particle_pack", Kokkos::WithoutInitializing),
+                        S * p_.n);
+    if (reinterpret_cast<std::uintptr_t>(pack_.data()) % 32 != 0)  // aligned loads read it
+      throw std::logic_error("DemSystem: the packed particle records are not 32-byte aligned");
+    return pack_.data();
+  }
   double near_skin() const {
     if (params_.near_skin >= 0) return params_.near_skin;
     return params_.skin / (stream_reads() && Model::history > 0 ? 32 : 16);
@@ -486,15 +514,19 @@ class DemSystem {
   // `started`: f and torque already hold the damping terms (kick_drift with damping_start()).
   // `near`: whether the pass reads the near list or records it (near_mode()).
   // `tracked`: see near_rows().
+  // `pack`: the packed records this step's kick-drift pass wrote (packed_records()), read
+  // where the pass takes the frictional stream.
   void forces(double dt, bool started = false, NearMode near = NearMode::Record,
-              bool tracked = false) {
+              bool tracked = false, const double* pack = nullptr) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
                   wall_history_, wall_record_, params_.gravity, external_);
       return;
     }
+    NearRows rows = near_rows(tracked);
+    if (near == NearMode::Use) rows.pack = pack;
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
-                   two_pass(), near_rows(tracked), near, params_.batched_contacts,
+                   two_pass(), rows, near, params_.batched_contacts,
                    params_.contact_thread_per_particle, started,
                    params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>());
     if (external_)
@@ -518,11 +550,12 @@ class DemSystem {
     };
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
+    double* const pack = near.on ? packed_records() : nullptr;
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
       const double max_sq =
-          kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp, near.drift_speed());
+          kick_drift<kRot>(p_, box_, nl_.reference(), dt, false, damp, near.drift_speed(), pack);
       lap(profile_->integrate);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       lap(profile_->strain);
@@ -533,7 +566,7 @@ class DemSystem {
       }
       lap(profile_->neighbor);
       walls_.update(time_ + dt);
-      forces(dt, damp.on, near_mode(near), near.on);
+      forces(dt, damp.on, near_mode(near), near.on, pack);
       lap(profile_->force);
       kick<kRot>(p_, dt);
       lap(profile_->integrate);
@@ -588,6 +621,8 @@ class DemSystem {
   using int_view = Kokkos::View<int*, typename ExecSpace::memory_space>;
   int_view near_k_, near_count_;  // the near list's rows (host one-pass kernel)
   NearStream near_stream_;        // and their stream (kernels/near_stream.hpp)
+  using pack_view = Kokkos::View<double*, Kokkos::HostSpace>;
+  pack_view pack_;  // the particles' packed records for the stream (packed_records())
   NearListUse near_use_;
 };
 

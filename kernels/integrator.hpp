@@ -5,6 +5,7 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
 #include <type_traits>
 #include <vector>
 
@@ -31,6 +32,10 @@ struct DampingStart {
 // after every store (the stores could alias them as far as the compiler knew). The same
 // operations in the same order as the loop of kick_drift below, so the same bits; returns
 // the block's largest squared displacement (NaNs skipped, as there).
+// `pack`: where not null, the pass also writes each particle's packed record (ParticlePack in
+// kernels/near_stream.hpp: x, y, z, radius | vx, vy, vz, 0 | wx, wy, wz, 0, 32-byte aligned)
+// with the values it has just stored, for the frictional stream of the force pass that
+// follows.
 struct KickDriftRows {
   double *x, *v, *f, *w, *q;
   const double *mass, *inertia, *x_ref;
@@ -38,6 +43,9 @@ struct KickDriftRows {
   double dt;
   bool pending;
   DampingStart damp;
+  double* pack = nullptr;
+  const double* radius = nullptr;         // read where pack is written
+  static constexpr int kPackStride = 12;  // ParticlePack::kStride
 
   // One component's kicks: the deferred closing half kick of the previous step (pend), this
   // step's opening one, and the next force sum started with the new velocity (start, mg =
@@ -101,9 +109,17 @@ struct KickDriftRows {
       m = d2 > m ? d2 : m;
       // NaN counts as a move beyond any skin here: the near list is then recorded again.
       if (Speed) mv = v2 > mv || v2 != v2 ? v2 : mv;
+      if (pack != nullptr) write_record(i);
     }
     max_v2 = mv;
     return m;
+  }
+  // Particle i's packed record from the arrays.
+  void write_record(int i) const {
+    double* const r = pack + static_cast<long>(kPackStride) * i;
+    for (int d = 0; d < 3; ++d)
+      r[d] = x[3 * i + d], r[4 + d] = v[3 * i + d], r[8 + d] = w[3 * i + d];
+    r[3] = radius[i], r[7] = 0.0, r[11] = 0.0;
   }
 
 #if GRANULAR_HOST_AVX
@@ -142,6 +158,17 @@ struct KickDriftRows {
         __builtin_shuffle(__builtin_shuffle(a[0], a[1], I4{2, 5, 5, 5}), a[2], I4{0, 1, 4, 7});
     return (x + y) + z;
   }
+  // The twelve components of four particles (a[k]: components 4 k .. 4 k + 3) stored as four
+  // quarters of packed records, particle p's (c_x, c_y, c_z, e[p]) at out + kPackStride p.
+  GRANULAR_AVX2_INLINE static void store_quarters(double* out, const V4 a[3], V4 e) {
+    using I4 = long __attribute__((vector_size(32)));
+    const V4 t1 = __builtin_shuffle(a[0], a[1], I4{3, 4, 5, 5});
+    const V4 t2 = __builtin_shuffle(a[1], a[2], I4{2, 3, 4, 4});
+    simd4::store(out, __builtin_shuffle(a[0], e, I4{0, 1, 2, 4}));
+    simd4::store(out + kPackStride, __builtin_shuffle(t1, e, I4{0, 1, 2, 5}));
+    simd4::store(out + 2 * kPackStride, __builtin_shuffle(t2, e, I4{0, 1, 2, 6}));
+    simd4::store(out + 3 * kPackStride, __builtin_shuffle(a[2], e, I4{1, 2, 3, 7}));
+  }
   template <bool Rotations, bool Speed>
   GRANULAR_AVX2 double run_avx2(int i0, int i1, double& max_v2) const {
     const double step = dt;
@@ -162,16 +189,20 @@ struct KickDriftRows {
     // end: a maximum with NaNs skipped (m) or kept (mv) is the same in any order.
     V4 m4 = simd4::splat(Kokkos::reduction_identity<double>::max()), mv4 = simd4::splat(max_v2);
     int i = i0;
+    double* const pk = pack;
+    const V4 zero = simd4::splat(0.0);
     for (; i + 4 <= i1; i += 4) {
       const V4 h4 = half_step / simd4::load(mass + i);
-      V4 uu[3], vv[3];
+      V4 uu[3], vv[3], xs[3], vs[3], ws[3];
       for (int k = 0; k < 3; ++k) {
         const int o = 3 * i + 4 * k;
         const V4 vd = kicks4(v + o, f + o, spread(h4, k), pend, start, mgb);
+        vs[k] = vd;
         V4 xd = simd4::load(x + o) + vstep * vd;
         const M4 above = per4[k] & (xd >= hi[k]), below = per4[k] & (xd < lo4[k]);
         xd = above ? xd - len4[k] : (below ? xd + len4[k] : xd);  // PeriodicBox::wrap
         simd4::store(x + o, xd);
+        xs[k] = xd;
         V4 u = xd - simd4::load(x_ref + o);
         const M4 far = per4[k] & (u > half4[k]), near = per4[k] & (u < -half4[k]);
         u = far ? u - len4[k] : (near ? u + len4[k] : u);  // PeriodicBox::min_image
@@ -182,8 +213,16 @@ struct KickDriftRows {
         const V4 hr4 = half_step / simd4::load(inertia + i);
         for (int k = 0; k < 3; ++k) {
           const int o = 3 * i + 4 * k;
-          kicks4(w + o, q + o, spread(hr4, k), pend, start, mgr);
+          ws[k] = kicks4(w + o, q + o, spread(hr4, k), pend, start, mgr);
         }
+      } else if (pk != nullptr) {
+        for (int k = 0; k < 3; ++k) ws[k] = simd4::load(w + 3 * i + 4 * k);
+      }
+      if (pk != nullptr) {
+        double* const r = pk + static_cast<long>(kPackStride) * i;
+        store_quarters(r, xs, simd4::load(radius + i));
+        store_quarters(r + 4, vs, zero);
+        store_quarters(r + 8, ws, zero);
       }
       // run()'s sums per particle, (0 + a_x) + a_y + a_z, in lanes: 0 + a is a for every
       // square (never -0), so (a_x + a_y) + a_z.
@@ -275,11 +314,22 @@ template <bool Rotations, class ExecSpace>
 double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
                   const typename Particles<ExecSpace>::vec_view& x_ref, double dt,
                   bool pending = false, DampingStart damp = DampingStart(),
-                  DriftSpeed* speed = nullptr) {
+                  DriftSpeed* speed = nullptr, double* pack = nullptr) {
   if constexpr (std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>) {
-    const KickDriftRows rows{
-        p.x.data(),       p.v.data(),   p.f.data(), p.w.data(), p.torque.data(), p.mass.data(),
-        p.inertia.data(), x_ref.data(), box,        dt,         pending,         damp};
+    const KickDriftRows rows{p.x.data(),
+                             p.v.data(),
+                             p.f.data(),
+                             p.w.data(),
+                             p.torque.data(),
+                             p.mass.data(),
+                             p.inertia.data(),
+                             x_ref.data(),
+                             box,
+                             dt,
+                             pending,
+                             damp,
+                             pack,
+                             p.radius.data()};
     constexpr int kBlock = 512;  // particles per task
     const int n = p.n, blocks = (n + kBlock - 1) / kBlock;
 #if GRANULAR_HOST_AVX
@@ -322,6 +372,8 @@ double kick_drift(const Particles<ExecSpace>& p, const PeriodicBox& box,
     speed->max_v2 = mv;
     return max_sq;
   }
+  if (pack != nullptr)  // the packed records serve the host force pass only
+    throw std::logic_error("kick_drift: packed records are written on host backends only");
   return kick_drift_kokkos<Rotations>(p, box, x_ref, dt, pending, damp);
 }
 

@@ -19,6 +19,14 @@
 // changes its result only where the whole chain is -0, wherever in the chain it is added, so
 // these rows add it before the slab's stream is read.
 //
+// Where the step supplies it, the frictional stream reads each particle's position, radius,
+// velocity and spin from one packed record of twelve doubles (ParticlePack: x, y, z, radius |
+// vx, vy, vz, 0 | wx, wy, wz, 0), written by the step's kick-drift pass from the values it
+// has just computed: a partner then costs two cache lines of input instead of the four of
+// the separate arrays (x, radius, v, w), and its four quarters come in as four aligned loads
+// transposed in registers. With N = 262144, one thread, the step gains 1.2x (design note);
+// the values, and so the bits, are those of the arrays.
+//
 // The frictionless linear law reads the stream as well (near_stream_slab_normal): its rows
 // are evaluated contact by contact, not batched, but they pay the same loop per row of
 // unpredictable length and a dependent load of the partner's index through the list. An
@@ -47,7 +55,8 @@ struct NearStream {
   std::vector<int> i, j, r, begin, empty, empty_begin;
   // Whether the last force pass recorded it (the next ones may read it).
   bool ready = false;
-  long reads = 0;  // force passes that read it
+  long reads = 0;         // force passes that read it
+  long packed_reads = 0;  // those of them that read the particles' packed records
   // Frees the arrays (a neighbour rebuild invalidates them; the count of reads stays).
   void release() {
     for (std::vector<int>* a : {&i, &j, &r, &begin, &empty, &empty_begin})
@@ -60,6 +69,14 @@ struct NearStream {
 inline bool near_stream_indexable(long rows, long particles) {
   return 3 * rows < 2147483647L && 3 * particles < 2147483647L;
 }
+
+// The packed per-particle record the frictional stream reads where the step supplies it
+// (KickDriftRows writes it; see the head of this file): doubles per particle, and where each
+// quarter of four doubles starts.
+struct ParticlePack {
+  static constexpr int kStride = 12;
+  static constexpr int kPosRadius = 0, kVelocity = 4, kSpin = 8;
+};
 
 #if GRANULAR_CONTACT_BATCH
 
@@ -163,6 +180,23 @@ GRANULAR_AVX2_INLINE void load3(const double* base, const int* idx, V& X, V& Y, 
   const __m128d z23 = _mm_loadh_pd(_mm_load_sd(p2 + 2), p3 + 2);
   Z = (V)_mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1);
 }
+// The quarter `at` of the packed records (ParticlePack) of the four particles k = idx[0..3],
+// as four vectors of four lanes (lane l: particle idx[l]): four aligned 32-byte loads and a
+// 4 x 4 transpose.
+GRANULAR_AVX2_INLINE void load_packed(const double* pack, int at, const int* idx, V& A, V& B, V& C,
+                                      V& D) {
+  constexpr long S = ParticlePack::kStride;
+  const __m256d r0 = _mm256_load_pd(pack + S * idx[0] + at);
+  const __m256d r1 = _mm256_load_pd(pack + S * idx[1] + at);
+  const __m256d r2 = _mm256_load_pd(pack + S * idx[2] + at);
+  const __m256d r3 = _mm256_load_pd(pack + S * idx[3] + at);
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+  A = (V)_mm256_permute2f128_pd(t0, t2, 0x20);
+  B = (V)_mm256_permute2f128_pd(t1, t3, 0x20);
+  C = (V)_mm256_permute2f128_pd(t0, t2, 0x31);
+  D = (V)_mm256_permute2f128_pd(t1, t3, 0x31);
+}
 // base[k] of the four indices k = idx[0..3].
 GRANULAR_AVX2_INLINE V load1(const double* base, const int* idx) {
   const __m128d a01 = _mm_loadh_pd(_mm_load_sd(base + idx[0]), base + idx[1]);
@@ -200,15 +234,22 @@ GRANULAR_AVX2_INLINE LaneBox lane_box(const PeriodicBox& b) {
 // The separation x_i - x_j (minimum image) and the radii of the four entries (ii, jj), and
 // which of the first `valid` lanes touch: split_row's test, touching() operation for
 // operation (r2: the squared distance it compares).
+// `pack`: the positions and radii come from the packed records (ParticlePack) instead of
+// x and rad.
 GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const double* rad,
-                                      const int* ii, const int* jj, int valid, V& X, V& Y, V& Z,
-                                      V& ai, V& aj, V& r2) {
+                                      const double* pack, const int* ii, const int* jj, int valid,
+                                      V& X, V& Y, V& Z, V& ai, V& aj, V& r2) {
   V xi0, xi1, xi2, xj0, xj1, xj2;
-  load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
+  if (pack != nullptr) {
+    load_packed(pack, ParticlePack::kPosRadius, ii, xi0, xi1, xi2, ai);
+    load_packed(pack, ParticlePack::kPosRadius, jj, xj0, xj1, xj2, aj);
+  } else {
+    load3(x, ii, xi0, xi1, xi2), load3(x, jj, xj0, xj1, xj2);
+    ai = load1(rad, ii), aj = load1(rad, jj);
+  }
   X = lb.px ? min_image4(xi0 - xj0, lb.len0, lb.hl0, lb.nhl0) : xi0 - xj0;
   Y = lb.py ? min_image4(xi1 - xj1, lb.len1, lb.hl1, lb.nhl1) : xi1 - xj1;
   Z = lb.pz ? min_image4(xi2 - xj2, lb.len2, lb.hl2, lb.nhl2) : xi2 - xj2;
-  ai = load1(rad, ii), aj = load1(rad, jj);
   const V sum = ai + aj;
   r2 = X * X + Y * Y + Z * Z;
   return (M)(r2 < sum * sum) & (M{0, 1, 2, 3} < valid);
@@ -217,14 +258,16 @@ GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const 
 
 // The stream entries e0 .. e1 - 1 (one slab) and the slab's rows without near entries
 // (empty[z0 .. z1 - 1]) with every pair's parameters (pn, pt): the forces, torques and
-// springs of the batched rows, bitwise.
-GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const PeriodicBox& b,
-                                           const LinearNormal::Params& pn,
-                                           const CoulombTangential::Params& pt, const int* si,
-                                           const int* sj, const int* sr, int e0, int e1,
-                                           const int* empty, int z0, int z1, double* hist,
-                                           const HostVec3& fh, const HostVec3& qh,
-                                           const double rate[3], double dt) {
+// springs of the batched rows, bitwise. `Packed`: the particles' inputs come from `pack`
+// (ParticlePack, the values of the arrays of hv).
+template <bool Packed>
+GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicBox& b,
+                                    const LinearNormal::Params& pn,
+                                    const CoulombTangential::Params& pt, const int* si,
+                                    const int* sj, const int* sr, int e0, int e1, const int* empty,
+                                    int z0, int z1, double* hist, const HostVec3& fh,
+                                    const HostVec3& qh, const double rate[3], double dt,
+                                    const double* pack) {
   using namespace near_stream_detail;
   using CB = ContactBatch;
   constexpr int H = 3;
@@ -258,24 +301,43 @@ GRANULAR_AVX2 inline void near_stream_slab(const HostParticleViews& hv, const Pe
     if (e + kAhead + CB::kW <= e1)
       for (int l = 0; l < CB::kW; ++l) {
         const int ja = sj[e + kAhead + l];
-        __builtin_prefetch(x + 3 * ja);
-        __builtin_prefetch(v + 3 * ja);
-        __builtin_prefetch(w + 3 * ja);
+        if constexpr (Packed) {  // a record's 96 bytes span two lines
+          const double* const r = pack + static_cast<long>(ParticlePack::kStride) * ja;
+          __builtin_prefetch(r);
+          __builtin_prefetch(r + ParticlePack::kSpin);
+        } else {
+          __builtin_prefetch(x + 3 * ja);
+          __builtin_prefetch(v + 3 * ja);
+          __builtin_prefetch(w + 3 * ja);
+        }
         __builtin_prefetch(f + 3 * ja, 1);
         __builtin_prefetch(q + 3 * ja, 1);
       }
     const int *const ii = si + e, *const jj = sj + e;
     CB::Lanes c;
     V r2;
-    const M touch = touching_lanes(lb, x, rad, ii, jj, valid, c.X, c.Y, c.Z, c.ai, c.aj, r2);
+    const M touch = touching_lanes(lb, x, rad, Packed ? pack : nullptr, ii, jj, valid, c.X, c.Y,
+                                   c.Z, c.ai, c.aj, r2);
     const int touching = CB::lanes(touch);
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
-      load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
+      if constexpr (Packed) {
+        V pad;
+        load_packed(pack, ParticlePack::kVelocity, ii, vi0, vi1, vi2, pad);
+        load_packed(pack, ParticlePack::kVelocity, jj, vj0, vj1, vj2, pad);
+      } else {
+        load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
+      }
       c.d0 = vi0 - vj0 + r30 * c.X;  // as set_motion
       c.d1 = vi1 - vj1 + r31 * c.Y;
       c.d2 = vi2 - vj2 + r32 * c.Z;
-      load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
+      if constexpr (Packed) {
+        V pad;
+        load_packed(pack, ParticlePack::kSpin, ii, c.wi0, c.wi1, c.wi2, pad);
+        load_packed(pack, ParticlePack::kSpin, jj, c.wj0, c.wj1, c.wj2, pad);
+      } else {
+        load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
+      }
       load3(hist, sr + e, c.s0, c.s1, c.s2);
       CB::law(c, par, vdt, touch);
       // Unpacked into (x, y) pairs, so that the scatter below moves each lane's vectors as
@@ -356,7 +418,8 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
       }
     const int *const ii = si + e, *const jj = sj + e;
     V X, Y, Z, ai, aj, r2;
-    const int touching = CB::lanes(touching_lanes(lb, x, rad, ii, jj, valid, X, Y, Z, ai, aj, r2));
+    const int touching =
+        CB::lanes(touching_lanes(lb, x, rad, nullptr, ii, jj, valid, X, Y, Z, ai, aj, r2));
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
       load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);

@@ -6,8 +6,8 @@
 //                        [--physics frictionless,friction,...|all] [--data packing.data]
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
 //                        [--near-skin S]
-//                        [--alternate batch|near|stream|skin|rows [--block B]]
-//                        [--skin-b S] [--zero-rows]
+//                        [--alternate batch|near|stream|skin|rows|pack [--block B]]
+//                        [--skin-b S] [--zero-rows] [--no-pack]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
@@ -22,6 +22,9 @@
 // --near-skin (A) and --skin-b (B).
 // --alternate rows: the two-pass kernel's flagged apart rows (A) against zero rows (B), laws
 // with rotations; --zero-rows: zero rows for the whole run (DemParams::flag_apart_rows; the
+// same bits).
+// --alternate pack: the frictional stream reading the particles' packed records (A) against
+// their arrays (B); --no-pack: the arrays for the whole run (DemParams::packed_stream; the
 // same bits).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
@@ -112,7 +115,7 @@ int main(int argc, char** argv) {
   {
     std::string sizes = "4096,32768", data, out, cache_dir = "perf_cache", physics = "frictionless";
     int reps = 3;
-    bool triad = true, batched = true, per_particle = false, flagged = true;
+    bool triad = true, batched = true, per_particle = false, flagged = true, packed = true;
     std::string alternate;
     long block = 100;
     double near_skin = DemParams{}.near_skin, skin_b = 0.0;
@@ -152,6 +155,8 @@ int main(int argc, char** argv) {
         skin_b = std::stod(next());
       else if (a == "--block")
         block = std::stol(next());
+      else if (a == "--no-pack")
+        packed = false;
       else if (a == "--zero-rows")
         flagged = false;
       else if (a == "--thread-per-particle")
@@ -166,8 +171,10 @@ int main(int argc, char** argv) {
       }
     }
     if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
-        alternate != "stream" && alternate != "skin" && alternate != "rows") {
-      std::cerr << "--alternate takes batch, near, stream, skin or rows, not " << alternate << "\n";
+        alternate != "stream" && alternate != "skin" && alternate != "rows" &&
+        alternate != "pack") {
+      std::cerr << "--alternate takes batch, near, stream, skin, rows or pack, not " << alternate
+                << "\n";
       return 2;
     }
     if (block < 1) {
@@ -190,6 +197,7 @@ int main(int argc, char** argv) {
     result["warmup_steps"] = warmup;
     result["batched_contacts"] = batched && cpu_has_avx();
     result["near_skin"] = near_skin;
+    result["packed_stream"] = packed;
     result["force_slabs"] = slabs == 0 ? Json("automatic") : Json(slabs);
     result["cell_block_rows"] = block_rows;
     if (!forces_by_slabs<Exec>())
@@ -236,6 +244,7 @@ int main(int argc, char** argv) {
             prm.near_skin = near_skin;
             prm.contact_thread_per_particle = per_particle;
             prm.flag_apart_rows = flagged;
+            prm.packed_stream = packed;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
@@ -279,6 +288,8 @@ int main(int argc, char** argv) {
                     sys.set_near_skin(on ? near_skin : skin_b);
                   else if (alternate == "rows")
                     sys.set_flag_apart_rows(on);
+                  else if (alternate == "pack")
+                    sys.set_packed_stream(on);
                   else
                     sys.set_near_skin(on ? near_skin : 0.0);
                   Kokkos::fence();
@@ -294,6 +305,7 @@ int main(int argc, char** argv) {
               sys.set_near_skin(near_skin);
               sys.set_near_stream(true);
               sys.set_flag_apart_rows(flagged);
+              sys.set_packed_stream(packed);
               std::cerr << phys << " N " << n << " rep " << r << ": " << alternate
                         << " on/off rate ratio, median of " << ratio.size() << " block pairs "
                         << median(ratio) << ", of the sums " << t_off / t_on << "\n";

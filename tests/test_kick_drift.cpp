@@ -6,10 +6,12 @@
 // velocity, and particle counts that leave a tail of one to three after the last whole four.
 // And the pass written with Kokkos' loops (kick_drift_kokkos, the devices' pass) against
 // kick_drift on every backend (the host rows on host backends): the same bits and the same
-// maximum, wherever in the pass the largest displacement lies.
+// maximum, wherever in the pass the largest displacement lies. And the packed records the pass
+// writes for the frictional stream (KickDriftRows::pack): the bits it stores in the arrays.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -93,7 +95,56 @@ void compare(int n, bool pending, bool damp) {
 #endif
 }
 
+// The pass writing the packed records (KickDriftRows::pack), four at a time or one by one:
+// each record holds the bits the pass stored in the arrays (position, radius, velocity, spin,
+// zero pads), and the arrays are those of the pass without records.
+template <bool Rotations>
+void compare_records(int n, bool avx2) {
+#if GRANULAR_HOST_AVX
+  Arrays a = make_arrays(n, 43), b = make_arrays(n, 43);
+  std::vector<double> radius(n);
+  for (int i = 0; i < n; ++i) radius[i] = 0.1 + 1e-3 * i;
+  constexpr int S = KickDriftRows::kPackStride;
+  // 32-byte aligned, as the aligned loads of the stream want, and filled with NaN first.
+  std::vector<double> store(S * n + 4, std::numeric_limits<double>::quiet_NaN());
+  double* pack = store.data();
+  while (reinterpret_cast<std::uintptr_t>(pack) % 32 != 0) ++pack;
+  KickDriftRows plain = rows_of(a, true, true), packed = rows_of(b, true, true);
+  packed.pack = pack, packed.radius = radius.data();
+  double va = 0.0, vb = 0.0;
+  const double ma =
+      avx2 ? plain.run_avx2<Rotations, true>(0, n, va) : plain.run<Rotations, true>(0, n, va);
+  const double mb =
+      avx2 ? packed.run_avx2<Rotations, true>(0, n, vb) : packed.run<Rotations, true>(0, n, vb);
+  const std::string what = "n " + std::to_string(n) + (avx2 ? " avx2" : " scalar");
+  EXPECT_TRUE(bitwise_equal({ma, va}, {mb, vb})) << what;
+  EXPECT_TRUE(bitwise_equal(a.x, b.x) && bitwise_equal(a.v, b.v) && bitwise_equal(a.f, b.f) &&
+              bitwise_equal(a.w, b.w) && bitwise_equal(a.q, b.q))
+      << what;
+  std::vector<double> expect(S * n), got(pack, pack + S * n);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 4; ++d) {
+      double* const r = expect.data() + S * i;
+      r[d] = d < 3 ? b.x[3 * i + d] : radius[i];
+      r[4 + d] = d < 3 ? b.v[3 * i + d] : 0.0;
+      r[8 + d] = d < 3 ? b.w[3 * i + d] : 0.0;
+    }
+  EXPECT_TRUE(bitwise_equal(expect, got)) << what;
+#else
+  (void)n, (void)avx2;
+#endif
+}
+
 }  // namespace
+
+TEST(KickDriftTest, PackedRecordsHoldTheBitsThePassStoresInTheArrays) {
+  for (int n : {1, 3, 4, 7, 64, 1029, 1031})
+    for (bool avx2 : {false, true}) {
+      if (avx2 && !cpu_has_avx2()) continue;
+      compare_records<true>(n, avx2);
+      compare_records<false>(n, avx2);
+    }
+}
 
 TEST(KickDriftTest, FourParticlesAtATimeGiveTheBitsOfTheParticleByParticlePass) {
   if (!cpu_has_avx2()) GTEST_SKIP() << "the processor has no AVX2";

@@ -7,7 +7,8 @@
 // rows) ends on the same bits. The near list's stream (kernels/near_stream.hpp) gives the
 // bits of the near rows, batched frictional and frictionless contact by contact, signed
 // zeros of rows without near entries included, and leaves laws with several parameter sets
-// to the rows.
+// to the rows; the frictional stream gives the same bits from the particles' packed records
+// as from their arrays.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -180,6 +181,27 @@ void several_parameter_sets_read_rows(const Model& two) {
   expect_same_bits(a, b, "near rows against the stream");
 }
 
+// The frictional stream reading the particles' packed records (DemParams::packed_stream)
+// against the stream reading the arrays: the same reads, the same bits, through rebuilds.
+template <class Exec>
+void compare_packed_with_arrays() {
+  DemParams prm = stirred_params(), arrays = stirred_params();
+  arrays.packed_stream = false;
+  auto a = stirred_packing<Exec, Frictional>(prm);
+  auto b = stirred_packing<Exec, Frictional>(arrays);
+  const long builds0 = a.neighbor_list().builds();
+  for (int call = 0; call < 3; ++call) a.step(200), b.step(200);
+  ASSERT_GT(a.neighbor_list().builds(), builds0 + 2) << "the run must cross rebuilds";
+  const NearListUse ua = a.near_list_use(), ub = b.near_list_use();
+  EXPECT_EQ(ua.stream_reads, ub.stream_reads);
+  EXPECT_EQ(ub.packed_reads, 0);
+  if (cpu_has_avx2()) {
+    EXPECT_GT(ua.stream_reads, 100);
+    EXPECT_EQ(ua.packed_reads, ua.stream_reads) << "every stream read takes the records";
+  }
+  expect_same_bits(a, b, "packed records against the arrays");
+}
+
 }  // namespace
 
 template <class T>
@@ -206,6 +228,11 @@ TYPED_TEST(NearListTest, FrictionalStreamOfTheNearListGivesTheBitsOfItsRows) {
   if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
   compare_stream_with_rows<TypeParam, Frictional>(0.025);  // coarse: read more than recorded
   compare_stream_with_rows<TypeParam, Frictional>(-1.0);   // the default: recorded every few steps
+}
+
+TYPED_TEST(NearListTest, FrictionalStreamFromPackedParticleRecordsGivesTheBitsOfTheArrays) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_packed_with_arrays<TypeParam>();
 }
 
 TYPED_TEST(NearListTest, FrictionlessStreamOfTheNearListGivesTheBitsOfItsRows) {
