@@ -66,10 +66,13 @@ struct DemParams {
   // (kernels/near_stream.hpp; the same bits either way).
   bool near_stream = true;
   // The frictional stream reads each particle's position, radius, velocity and spin from one
-  // packed record of twelve doubles, written by the step's kick-drift pass (ParticlePack in
-  // kernels/near_stream.hpp; two cache lines per partner instead of four, 96 bytes more per
-  // particle; the same bits either way).
+  // packed record, written by the step's kick-drift pass (kernels/particle_pack.hpp: two
+  // cache lines per partner instead of four, 96 bytes more per particle; the same bits either
+  // way), in systems of at least packed_stream_min_particles: it gains 1.18x at N = 262144
+  // and costs 0.98x at 4096 and 32768, whose particle arrays the caches hold anyway
+  // (perf/README.md, design note).
   bool packed_stream = true;
+  int packed_stream_min_particles = 65536;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -459,7 +462,8 @@ class DemSystem {
   // take the stream in that run's steps (the drift's values: between the two, a read step
   // neither strains nor rebuilds).
   double* packed_records() {
-    if (!params_.packed_stream || !stream_reads() || Model::history == 0 || mc_.active())
+    if (!params_.packed_stream || !stream_reads() || Model::history == 0 || mc_.active() ||
+        p_.n < params_.packed_stream_min_particles)
       return nullptr;
     constexpr long S = ParticlePack::kStride;
     if (pack_.extent(0) != static_cast<size_t>(S * p_.n))

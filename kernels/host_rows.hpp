@@ -73,9 +73,9 @@ struct NearRows {
   // Where the recordings also write the near list as a flat stream and the readings take it
   // from (kernels/near_stream.hpp; null: the rows are read as recorded).
   NearStream* stream = nullptr;
-  // The particles' packed records (ParticlePack in kernels/near_stream.hpp), holding this
-  // step's positions, radii, velocities and spins, where the step wrote them for the frictional
-  // stream's reads (null: the stream reads the arrays).
+  // The particles' packed records (kernels/particle_pack.hpp), holding this step's positions,
+  // radii, velocities and spins, where the step wrote them for the frictional stream's reads (null:
+  // the stream reads the arrays).
   const double* pack = nullptr;
 };
 

@@ -12,6 +12,7 @@
 #include "core/box.hpp"
 #include "core/particles.hpp"
 #include "kernels/host_simd.hpp"
+#include "kernels/particle_pack.hpp"
 
 namespace granular {
 
@@ -33,9 +34,8 @@ struct DampingStart {
 // operations in the same order as the loop of kick_drift below, so the same bits; returns
 // the block's largest squared displacement (NaNs skipped, as there).
 // `pack`: where not null, the pass also writes each particle's packed record (ParticlePack in
-// kernels/near_stream.hpp: x, y, z, radius | vx, vy, vz, 0 | wx, wy, wz, 0, 32-byte aligned)
-// with the values it has just stored, for the frictional stream of the force pass that
-// follows.
+// kernels/particle_pack.hpp: x, y, z, radius | vx, vy, vz, 0 | wx, wy, wz, 0) with the values
+// it has just stored, for the frictional stream of the force pass that follows.
 struct KickDriftRows {
   double *x, *v, *f, *w, *q;
   const double *mass, *inertia, *x_ref;
@@ -44,8 +44,7 @@ struct KickDriftRows {
   bool pending;
   DampingStart damp;
   double* pack = nullptr;
-  const double* radius = nullptr;         // read where pack is written
-  static constexpr int kPackStride = 12;  // ParticlePack::kStride
+  const double* radius = nullptr;  // read where pack is written
 
   // One component's kicks: the deferred closing half kick of the previous step (pend), this
   // step's opening one, and the next force sum started with the new velocity (start, mg =
@@ -116,7 +115,7 @@ struct KickDriftRows {
   }
   // Particle i's packed record from the arrays.
   void write_record(int i) const {
-    double* const r = pack + static_cast<long>(kPackStride) * i;
+    double* const r = pack + static_cast<long>(ParticlePack::kStride) * i;
     for (int d = 0; d < 3; ++d)
       r[d] = x[3 * i + d], r[4 + d] = v[3 * i + d], r[8 + d] = w[3 * i + d];
     r[3] = radius[i], r[7] = 0.0, r[11] = 0.0;
@@ -159,15 +158,16 @@ struct KickDriftRows {
     return (x + y) + z;
   }
   // The twelve components of four particles (a[k]: components 4 k .. 4 k + 3) stored as four
-  // quarters of packed records, particle p's (c_x, c_y, c_z, e[p]) at out + kPackStride p.
+  // quarters of packed records, particle p's (c_x, c_y, c_z, e[p]) at out + S p.
   GRANULAR_AVX2_INLINE static void store_quarters(double* out, const V4 a[3], V4 e) {
+    constexpr int S = ParticlePack::kStride;
     using I4 = long __attribute__((vector_size(32)));
     const V4 t1 = __builtin_shuffle(a[0], a[1], I4{3, 4, 5, 5});
     const V4 t2 = __builtin_shuffle(a[1], a[2], I4{2, 3, 4, 4});
     simd4::store(out, __builtin_shuffle(a[0], e, I4{0, 1, 2, 4}));
-    simd4::store(out + kPackStride, __builtin_shuffle(t1, e, I4{0, 1, 2, 5}));
-    simd4::store(out + 2 * kPackStride, __builtin_shuffle(t2, e, I4{0, 1, 2, 6}));
-    simd4::store(out + 3 * kPackStride, __builtin_shuffle(a[2], e, I4{1, 2, 3, 7}));
+    simd4::store(out + S, __builtin_shuffle(t1, e, I4{0, 1, 2, 5}));
+    simd4::store(out + 2 * S, __builtin_shuffle(t2, e, I4{0, 1, 2, 6}));
+    simd4::store(out + 3 * S, __builtin_shuffle(a[2], e, I4{1, 2, 3, 7}));
   }
   template <bool Rotations, bool Speed>
   GRANULAR_AVX2 double run_avx2(int i0, int i1, double& max_v2) const {
@@ -215,14 +215,14 @@ struct KickDriftRows {
           const int o = 3 * i + 4 * k;
           ws[k] = kicks4(w + o, q + o, spread(hr4, k), pend, start, mgr);
         }
-      } else if (pk != nullptr) {
+      } else if (pk != nullptr) {  // the spins as they are
         for (int k = 0; k < 3; ++k) ws[k] = simd4::load(w + 3 * i + 4 * k);
       }
       if (pk != nullptr) {
-        double* const r = pk + static_cast<long>(kPackStride) * i;
-        store_quarters(r, xs, simd4::load(radius + i));
-        store_quarters(r + 4, vs, zero);
-        store_quarters(r + 8, ws, zero);
+        double* const r = pk + static_cast<long>(ParticlePack::kStride) * i;
+        store_quarters(r + ParticlePack::kPosRadius, xs, simd4::load(radius + i));
+        store_quarters(r + ParticlePack::kVelocity, vs, zero);
+        store_quarters(r + ParticlePack::kSpin, ws, zero);
       }
       // run()'s sums per particle, (0 + a_x) + a_y + a_z, in lanes: 0 + a is a for every
       // square (never -0), so (a_x + a_y) + a_z.

@@ -19,13 +19,12 @@
 // changes its result only where the whole chain is -0, wherever in the chain it is added, so
 // these rows add it before the slab's stream is read.
 //
-// Where the step supplies it, the frictional stream reads each particle's position, radius,
-// velocity and spin from one packed record of twelve doubles (ParticlePack: x, y, z, radius |
-// vx, vy, vz, 0 | wx, wy, wz, 0), written by the step's kick-drift pass from the values it
-// has just computed: a partner then costs two cache lines of input instead of the four of
-// the separate arrays (x, radius, v, w), and its four quarters come in as four aligned loads
-// transposed in registers. With N = 262144, one thread, the step gains 1.2x (design note);
-// the values, and so the bits, are those of the arrays.
+// Where the step supplies them, the frictional stream reads each particle's position, radius,
+// velocity and spin from one packed record (kernels/particle_pack.hpp), written by the step's
+// kick-drift pass from the values it has just stored: a partner then costs two cache lines of
+// input instead of four, and each quarter of a record comes in with the quarters of three
+// other particles as four aligned loads transposed in registers. The values, and so the bits,
+// are those of the arrays (gains: design note; the frictionless stream gained nothing).
 //
 // The frictionless linear law reads the stream as well (near_stream_slab_normal): its rows
 // are evaluated contact by contact, not batched, but they pay the same loop per row of
@@ -40,6 +39,7 @@
 #include "core/box.hpp"
 #include "kernels/contact_batch.hpp"
 #include "kernels/host_rows.hpp"
+#include "kernels/particle_pack.hpp"
 
 #if GRANULAR_CONTACT_BATCH
 #include <immintrin.h>
@@ -69,14 +69,6 @@ struct NearStream {
 inline bool near_stream_indexable(long rows, long particles) {
   return 3 * rows < 2147483647L && 3 * particles < 2147483647L;
 }
-
-// The packed per-particle record the frictional stream reads where the step supplies it
-// (KickDriftRows writes it; see the head of this file): doubles per particle, and where each
-// quarter of four doubles starts.
-struct ParticlePack {
-  static constexpr int kStride = 12;
-  static constexpr int kPosRadius = 0, kVelocity = 4, kSpin = 8;
-};
 
 #if GRANULAR_CONTACT_BATCH
 
@@ -234,8 +226,8 @@ GRANULAR_AVX2_INLINE LaneBox lane_box(const PeriodicBox& b) {
 // The separation x_i - x_j (minimum image) and the radii of the four entries (ii, jj), and
 // which of the first `valid` lanes touch: split_row's test, touching() operation for
 // operation (r2: the squared distance it compares).
-// `pack`: the positions and radii come from the packed records (ParticlePack) instead of
-// x and rad.
+// `pack`: the positions and radii come from the packed records (ParticlePack) instead of x
+// and rad.
 GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const double* rad,
                                       const double* pack, const int* ii, const int* jj, int valid,
                                       V& X, V& Y, V& Z, V& ai, V& aj, V& r2) {
@@ -271,6 +263,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
   using namespace near_stream_detail;
   using CB = ContactBatch;
   constexpr int H = 3;
+  constexpr long S = ParticlePack::kStride;
   constexpr int kAhead = 16;     // entries
   for (int z = z0; z < z1; ++z)  // a row's empty sum: +0 (see the head of this file)
     for (int d = 0; d < 3; ++d) fh(empty[z], d) += 0.0, qh(empty[z], d) += 0.0;
@@ -302,7 +295,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
       for (int l = 0; l < CB::kW; ++l) {
         const int ja = sj[e + kAhead + l];
         if constexpr (Packed) {  // a record's 96 bytes span two lines
-          const double* const r = pack + static_cast<long>(ParticlePack::kStride) * ja;
+          const double* const r = pack + S * ja;
           __builtin_prefetch(r);
           __builtin_prefetch(r + ParticlePack::kSpin);
         } else {

@@ -7,7 +7,7 @@
 //                        [--out perf/results/dem_throughput_2t.json] [--no-triad] [--no-batch]
 //                        [--near-skin S]
 //                        [--alternate batch|near|stream|skin|rows|pack [--block B]]
-//                        [--skin-b S] [--zero-rows] [--no-pack]
+//                        [--skin-b S] [--zero-rows] [--no-pack] [--pack-min N]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
@@ -25,7 +25,7 @@
 // same bits).
 // --alternate pack: the frictional stream reading the particles' packed records (A) against
 // their arrays (B); --no-pack: the arrays for the whole run (DemParams::packed_stream; the
-// same bits).
+// same bits); --pack-min N: the records from N particles on (packed_stream_min_particles).
 // --thread-per-particle: the device's contacts pass with one thread per particle instead of
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
@@ -120,6 +120,7 @@ int main(int argc, char** argv) {
     long block = 100;
     double near_skin = DemParams{}.near_skin, skin_b = 0.0;
     int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
+    int pack_min = DemParams{}.packed_stream_min_particles;
     long steps = 2000, warmup = 500;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -157,6 +158,8 @@ int main(int argc, char** argv) {
         block = std::stol(next());
       else if (a == "--no-pack")
         packed = false;
+      else if (a == "--pack-min")
+        pack_min = std::stoi(next());
       else if (a == "--zero-rows")
         flagged = false;
       else if (a == "--thread-per-particle")
@@ -198,6 +201,7 @@ int main(int argc, char** argv) {
     result["batched_contacts"] = batched && cpu_has_avx();
     result["near_skin"] = near_skin;
     result["packed_stream"] = packed;
+    result["packed_stream_min_particles"] = pack_min;
     result["force_slabs"] = slabs == 0 ? Json("automatic") : Json(slabs);
     result["cell_block_rows"] = block_rows;
     if (!forces_by_slabs<Exec>())
@@ -245,6 +249,7 @@ int main(int argc, char** argv) {
             prm.contact_thread_per_particle = per_particle;
             prm.flag_apart_rows = flagged;
             prm.packed_stream = packed;
+            prm.packed_stream_min_particles = pack_min;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.

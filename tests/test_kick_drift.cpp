@@ -104,7 +104,7 @@ void compare_records(int n, bool avx2) {
   Arrays a = make_arrays(n, 43), b = make_arrays(n, 43);
   std::vector<double> radius(n);
   for (int i = 0; i < n; ++i) radius[i] = 0.1 + 1e-3 * i;
-  constexpr int S = KickDriftRows::kPackStride;
+  constexpr int S = ParticlePack::kStride;
   // 32-byte aligned, as the aligned loads of the stream want, and filled with NaN first.
   std::vector<double> store(S * n + 4, std::numeric_limits<double>::quiet_NaN());
   double* pack = store.data();

@@ -181,14 +181,24 @@ void several_parameter_sets_read_rows(const Model& two) {
   expect_same_bits(a, b, "near rows against the stream");
 }
 
-// The frictional stream reading the particles' packed records (DemParams::packed_stream)
-// against the stream reading the arrays: the same reads, the same bits, through rebuilds.
+// The frictional stream reading the particles' packed records (DemParams::packed_stream,
+// here for any number of particles) against the stream reading the arrays: the same reads,
+// the same bits, through rebuilds. With the default threshold a system this small reads the
+// arrays.
 template <class Exec>
 void compare_packed_with_arrays() {
-  DemParams prm = stirred_params(), arrays = stirred_params();
+  DemParams prm = stirred_params(), arrays = stirred_params(), small = stirred_params();
+  prm.packed_stream_min_particles = 0;
   arrays.packed_stream = false;
   auto a = stirred_packing<Exec, Frictional>(prm);
   auto b = stirred_packing<Exec, Frictional>(arrays);
+  auto c = stirred_packing<Exec, Frictional>(small);
+  ASSERT_LT(c.particles().n, small.packed_stream_min_particles);
+  c.step(50);
+  if (cpu_has_avx2()) {
+    EXPECT_GT(c.near_list_use().stream_reads, 0);
+  }
+  EXPECT_EQ(c.near_list_use().packed_reads, 0) << "below the threshold the stream reads arrays";
   const long builds0 = a.neighbor_list().builds();
   for (int call = 0; call < 3; ++call) a.step(200), b.step(200);
   ASSERT_GT(a.neighbor_list().builds(), builds0 + 2) << "the run must cross rebuilds";
