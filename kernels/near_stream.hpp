@@ -226,13 +226,14 @@ GRANULAR_AVX2_INLINE LaneBox lane_box(const PeriodicBox& b) {
 // The separation x_i - x_j (minimum image) and the radii of the four entries (ii, jj), and
 // which of the first `valid` lanes touch: split_row's test, touching() operation for
 // operation (r2: the squared distance it compares).
-// `pack`: the positions and radii come from the packed records (ParticlePack) instead of x
-// and rad.
+// `Packed`: the positions and radii come from the packed records `pack` (ParticlePack)
+// instead of x and rad.
+template <bool Packed>
 GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const double* rad,
                                       const double* pack, const int* ii, const int* jj, int valid,
                                       V& X, V& Y, V& Z, V& ai, V& aj, V& r2) {
   V xi0, xi1, xi2, xj0, xj1, xj2;
-  if (pack != nullptr) {
+  if constexpr (Packed) {
     load_packed(pack, ParticlePack::kPosRadius, ii, xi0, xi1, xi2, ai);
     load_packed(pack, ParticlePack::kPosRadius, jj, xj0, xj1, xj2, aj);
   } else {
@@ -309,8 +310,8 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
     const int *const ii = si + e, *const jj = sj + e;
     CB::Lanes c;
     V r2;
-    const M touch = touching_lanes(lb, x, rad, Packed ? pack : nullptr, ii, jj, valid, c.X, c.Y,
-                                   c.Z, c.ai, c.aj, r2);
+    const M touch =
+        touching_lanes<Packed>(lb, x, rad, pack, ii, jj, valid, c.X, c.Y, c.Z, c.ai, c.aj, r2);
     const int touching = CB::lanes(touch);
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
@@ -412,7 +413,7 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
     const int *const ii = si + e, *const jj = sj + e;
     V X, Y, Z, ai, aj, r2;
     const int touching =
-        CB::lanes(touching_lanes(lb, x, rad, nullptr, ii, jj, valid, X, Y, Z, ai, aj, r2));
+        CB::lanes(touching_lanes<false>(lb, x, rad, nullptr, ii, jj, valid, X, Y, Z, ai, aj, r2));
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
       load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
