@@ -19,6 +19,8 @@ import os
 import re
 import statistics
 
+from peer_logs import read_settings
+
 ap = argparse.ArgumentParser()
 ap.add_argument("logs", nargs="+")
 ap.add_argument("--results", default=os.path.join(os.path.dirname(__file__), "..", "results"))
@@ -29,12 +31,7 @@ stamp = os.path.basename(logs.rstrip("/"))
 results = os.path.abspath(args.results)
 os.makedirs(results, exist_ok=True)
 
-settings = {}
-with open(os.path.join(logs, "settings.txt")) as f:
-    for line in f:
-        if "=" in line:
-            k, v = line.rstrip("\n").split("=", 1)
-            settings[k] = v
+settings = read_settings(logs)
 
 # Which engine physics is timed against which LAMMPS style.
 PAIRS = [

@@ -17,6 +17,8 @@ import os
 import re
 import statistics
 
+from peer_logs import read_settings
+
 ap = argparse.ArgumentParser()
 ap.add_argument("logs")
 ap.add_argument("--results", default=os.path.join(os.path.dirname(__file__), "..", "results"))
@@ -26,12 +28,7 @@ stamp = os.path.basename(logs.rstrip("/")).replace("flatness_", "")
 results = os.path.abspath(args.results)
 os.makedirs(results, exist_ok=True)
 
-settings = {}
-with open(os.path.join(logs, "settings.txt")) as f:
-    for line in f:
-        if "=" in line:
-            k, v = line.rstrip("\n").split("=", 1)
-            settings[k] = v
+settings = read_settings(logs)
 
 runs = []  # code, N, par (threads or ranks), rep, rate, resident_kB (engine)
 for path in sorted(glob.glob(os.path.join(logs, "engine_x*_t*_r*.json"))):
@@ -135,6 +132,14 @@ try:
 except ImportError:
     print("matplotlib missing: no chart")
 else:
+    def finish(ax, xlabel, ylabel, title):
+        ax.set_xscale("log", base=2)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title)
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.6))
     for (code, par), by_n in sorted(series.items()):
         rows = [r for r in summary if r["code"] == code and r["par"] == par]
@@ -144,23 +149,15 @@ else:
                       "LAMMPS " + settings.get("model", "") + ", %d rank(s)") % par)
     a.axhline(0.85, color="grey", lw=0.8, ls=":")
     a.text(int(settings.get("base", 4096)), 0.86, "0.85", color="grey", fontsize=8)
-    a.set_xscale("log", base=2)
-    a.set_xlabel("N (tilings of one packing)")
-    a.set_ylabel("particle-steps/s relative to the smallest N")
-    a.set_title("same work per particle, growing working set")
-    a.legend(fontsize=8)
-    a.grid(alpha=0.3)
+    finish(a, "N (tilings of one packing)", "particle-steps/s relative to the smallest N",
+           "same work per particle, growing working set")
     for t, c in sorted(curve.items()):
         b.plot([w / 2**20 for w, _ in c], [g for _, g in c], label="triad, %d thread(s)" % t)
     for r in summary:
         if r["code"] == "engine" and r["par"] == min(p for _, p in series if _ == "engine"):
             b.axvline(r["resident_bytes"] / 2**20, color="grey", lw=0.6, ls=":")
-    b.set_xscale("log", base=2)
-    b.set_xlabel("working set (MiB); dotted: the engine's resident memory at each N")
-    b.set_ylabel("GB/s")
-    b.set_title("the machine's memory curve")
-    b.legend(fontsize=8)
-    b.grid(alpha=0.3)
+    finish(b, "working set (MiB); dotted: the engine's resident memory at each N", "GB/s",
+           "the machine's memory curve")
     fig.tight_layout()
     tmp = os.path.join(results, "flatness_%s.png.tmp" % stamp)
     fig.savefig(tmp, dpi=110, format="png")
