@@ -9,6 +9,7 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 
 #include "core/output.hpp"
@@ -31,11 +32,18 @@ int main(int argc, char** argv) {
       }
       if (a == "--out")
         out = argv[++i];
-      else if (a == "--min-kib")
-        min_kib = std::stol(argv[++i]);
-      else if (a == "--max-mib")
-        max_mib = std::stol(argv[++i]);
-      else if (a.rfind("--kokkos", 0) != 0) {
+      else if (a == "--min-kib" || a == "--max-mib") {
+        const std::string value = argv[++i];
+        try {
+          size_t used = 0;
+          (a == "--min-kib" ? min_kib : max_mib) = std::stol(value, &used);
+          if (used != value.size()) throw std::invalid_argument(value);
+        } catch (const std::exception&) {
+          std::cerr << a << " takes a whole number, not '" << value << "'\n";
+          rc = 2;
+          break;
+        }
+      } else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         rc = 2;
         break;
