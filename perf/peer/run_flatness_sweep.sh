@@ -50,6 +50,9 @@ while [ $# -gt 0 ]; do
 done
 
 say() { printf '[flatness] %s\n' "$*" >&2; }
+for v in "base=$base" "reps=$reps" "budget=$budget" "warmup=$warmup"; do
+  [[ ${v#*=} =~ ^[0-9]+$ ]] || { say "--${v%%=*} takes a whole number, not '${v#*=}'"; exit 2; }
+done
 bin=${GRANULAR_BUILD:-$repo/build}/bin
 for b in bench_dem_throughput bench_memory_curve; do
   [ -x "$bin/$b" ] || { say "missing $bin/$b (run scripts/setup.sh)"; exit 1; }
