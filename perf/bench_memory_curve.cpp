@@ -75,8 +75,13 @@ int main(int argc, char** argv) {
         std::cout << "working set " << 24.0 * n / 1048576 << " MiB: " << bw / 1e9 << " GB/s\n";
       }
       result["rows"] = rows;
-      write_text_file(out, result.dump());
-      std::cout << "wrote " << out << "\n";
+      try {
+        write_text_file(out, result.dump());
+        std::cout << "wrote " << out << "\n";
+      } catch (const std::exception& e) {
+        std::cerr << e.what() << "\n";
+        rc = 1;
+      }
     }
   }
   Kokkos::finalize();
