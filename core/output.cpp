@@ -137,6 +137,23 @@ void Json::dump_to(std::string& out, int indent, int depth) const {
   }
 }
 
+std::vector<std::string> Json::non_finite_paths() const {
+  std::vector<std::string> out;
+  collect_non_finite(out, "");
+  return out;
+}
+
+void Json::collect_non_finite(std::vector<std::string>& out, const std::string& at) const {
+  if (auto d = std::get_if<double>(&v_)) {
+    if (!std::isfinite(*d)) out.push_back(at.empty() ? "(value)" : at);
+  } else if (auto o = std::get_if<Object>(&v_)) {
+    for (const auto& [k, v] : *o) v.collect_non_finite(out, at.empty() ? k : at + "." + k);
+  } else if (auto a = std::get_if<Array>(&v_)) {
+    for (size_t i = 0; i < a->size(); ++i)
+      (*a)[i].collect_non_finite(out, at + "[" + std::to_string(i) + "]");
+  }
+}
+
 std::string Json::dump(int indent) const {
   std::string out;
   dump_to(out, indent, 0);
@@ -204,6 +221,27 @@ void write_text_file(const std::string& path, const std::string& content) {
     }
   }
   commit_file(tmp, path);
+}
+
+void write_summary(const std::string& path, const Json& summary,
+                   const std::vector<std::string>& tables) {
+  std::vector<std::string> bad;
+  for (const std::string& at : summary.non_finite_paths()) {
+    bool in_table = false;
+    for (const std::string& t : tables)
+      in_table = in_table || at.compare(0, t.size() + 1, t + ".") == 0 ||
+                 at.compare(0, t.size() + 1, t + "[") == 0;
+    if (!in_table) bad.push_back(at);
+  }
+  if (!bad.empty()) {
+    std::string list;
+    for (size_t i = 0; i < bad.size() && i < 8; ++i) list += (i ? ", " : "") + bad[i];
+    if (bad.size() > 8) list += ", ... (" + std::to_string(bad.size()) + " in all)";
+    throw PhysicsError("non-finite result (NaN or inf) in " + list + ": the run failed, so " +
+                       path + " was not written; look for the first warning above, or reduce" +
+                       " the time step");
+  }
+  write_text_file(path, summary.dump());
 }
 
 // ---- HDF5 --------------------------------------------------------------------------

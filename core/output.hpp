@@ -36,6 +36,10 @@ class Json {
     j.v_ = Array{};
     return j;
   }
+  // A value that is undefined by construction when it is not finite (a fit with too few
+  // points, a ratio over an empty set): null then. Never for a computed physical result,
+  // whose NaN must stop the run (write_summary).
+  static Json or_null(double v) { return v - v == 0 ? Json(v) : Json(); }
   // Raw JSON text (already valid), e.g. a value copied from a scene file.
   static Json raw(std::string text) {
     Json j;
@@ -46,8 +50,12 @@ class Json {
   Json& operator[](const std::string& key);  // object member, created on first use
   void push(Json value);                     // array element
   std::string dump(int indent = 2) const;
+  // Where the tree holds a NaN or inf number ("a.b[2].c"), in order. A value that is not
+  // defined is written as Json() (null) on purpose; a non-finite number is a failed result.
+  std::vector<std::string> non_finite_paths() const;
 
  private:
+  void collect_non_finite(std::vector<std::string>& out, const std::string& at) const;
   struct Raw {
     std::string text;
   };
@@ -60,6 +68,12 @@ class Json {
 std::string partial_name(const std::string& path);
 void commit_file(const std::string& partial, const std::string& path);
 void write_text_file(const std::string& path, const std::string& content);
+// summary.json, refused (PhysicsError naming the quantities, nothing written) when any number
+// in it is NaN or inf: a failed result must never look like a finished run. `tables` names
+// top-level members whose cells may be NaN by convention (a column that does not apply to a
+// row, written as null); everything else must be finite.
+void write_summary(const std::string& path, const Json& summary,
+                   const std::vector<std::string>& tables = {});
 void make_directories(const std::string& dir);
 
 // ---- HDF5 --------------------------------------------------------------------------

@@ -44,6 +44,7 @@ template <>
 struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
   static constexpr bool available = GRANULAR_CONTACT_BATCH;
   static bool usable(const ContactModel<LinearNormal, CoulombTangential>& m) {
+    if (m.coulomb_elastic_normal) return false;  // the batch limits with the total force
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b)
         if (m.tangential.table.p[a][b].law != CoulombTangential::Constant) return false;
@@ -245,7 +246,7 @@ struct ContactBatch {
     const V aw2 = li * l.wi2 + lj * l.wj2;
     const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
     const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
-    // rotate_into_plane: an empty spring stays as it is.
+    // rotate_into_plane: an empty spring stays as it is, one along the normal is released.
     V s0 = l.s0, s1 = l.s1, s2 = l.s2;
     const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
     const M empty = len_sq == zero;
@@ -254,10 +255,17 @@ struct ContactBatch {
     const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
     const M small = x < splat(1e-4);
     V scale = taylor;
-    if (!all(small | ~active)) scale = sel(small, taylor, one / vsqrt(sel(small, one, one - x)));
+    M released = small & ~small;  // none
+    if (!all(small | ~active)) {
+      const M in_plane = x < splat(1.0 - kSpringAlongNormal);  // false for NaN too
+      const M root = in_plane & ~small;
+      scale = sel(root, one / vsqrt(sel(root, one - x, one)), taylor);
+      released = ~(in_plane | empty);
+    }
     s0 = sel(empty, s0, (s0 - sn * n0) * scale);
     s1 = sel(empty, s1, (s1 - sn * n1) * scale);
     s2 = sel(empty, s2, (s2 - sn * n2) * scale);
+    s0 = sel(released, zero, s0), s1 = sel(released, zero, s1), s2 = sel(released, zero, s2);
     s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
     // coulomb_spring with k = kt, g = gt.
     const V k = p.kt, g = p.gt, nk = -k;

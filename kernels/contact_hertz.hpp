@@ -40,15 +40,17 @@ struct HertzNormal {
 
   // Tangent stiffness dF/d(delta) = 1.5 K sqrt(L delta), bounded above with the largest
   // allowed overlap and the largest pair length: the guard assumes the stiffest contact.
-  double stiffness(double delta_ref, double length_max) const {
+  double stiffness(double delta_ref, double length_max,
+                   const PairMask& pairs = PairMask::all()) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b)
-        k = std::max(k, 1.5 * table.p[a][b].K * std::sqrt(length_max * delta_ref));
+        if (pairs(a, b)) k = std::max(k, 1.5 * table.p[a][b].K * std::sqrt(length_max * delta_ref));
     return k;
   }
-  double shortest_duration(double m, double delta_ref, double length_max) const {
-    return M_PI * std::sqrt(m / stiffness(delta_ref, length_max));
+  double shortest_duration(double m, double delta_ref, double length_max,
+                           const PairMask& pairs = PairMask::all()) const {
+    return M_PI * std::sqrt(m / stiffness(delta_ref, length_max, pairs));
   }
 
   // Modulus form from species moduli: 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j.

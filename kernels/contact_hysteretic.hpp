@@ -46,14 +46,16 @@ struct HystereticNormal {
     return 0.5 * f * f / q.k2;
   }
 
-  double stiffness(double = 0, double = 0) const {
+  double stiffness(double = 0, double = 0, const PairMask& pairs = PairMask::all()) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b) k = std::max({k, table.p[a][b].k2, table.p[a][b].kc});
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (pairs(a, b)) k = std::max({k, table.p[a][b].k2, table.p[a][b].kc});
     return k;
   }
-  double shortest_duration(double m, double = 0, double = 0) const {
-    return M_PI * std::sqrt(m / stiffness());
+  double shortest_duration(double m, double = 0, double = 0,
+                           const PairMask& pairs = PairMask::all()) const {
+    return M_PI * std::sqrt(m / stiffness(0, 0, pairs));
   }
   static HystereticNormal uniform(double k1, double k2, double kc, double gn) {
     return {PairTable<Params>::uniform({k1, k2, kc, gn})};

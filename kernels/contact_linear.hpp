@@ -46,22 +46,25 @@ struct LinearNormal {
   }
   // Shortest collision for the time-step guard over all pairs; overdamped pairs fall
   // back to the undamped half period, which is shorter.
-  double shortest_duration(double m, double /*delta_ref*/ = 0, double /*length_max*/ = 0) const {
+  double shortest_duration(double m, double /*delta_ref*/ = 0, double /*length_max*/ = 0,
+                           const PairMask& pairs = PairMask::all()) const {
     double t = 1e300;
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b) {
         const Params& q = table.p[a][b];
-        if (!(q.kn > 0)) continue;
+        if (!pairs(a, b) || !(q.kn > 0)) continue;
         const double eta = q.gn / (2.0 * m);
         t = std::min(t, q.kn / m > eta * eta ? M_PI / std::sqrt(q.kn / m - eta * eta)
                                              : M_PI * std::sqrt(m / q.kn));
       }
     return t;
   }
-  double stiffness(double /*delta_ref*/ = 0, double /*length_max*/ = 0) const {
+  double stiffness(double /*delta_ref*/ = 0, double /*length_max*/ = 0,
+                   const PairMask& pairs = PairMask::all()) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b) k = std::max(k, table.p[a][b].kn);
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (pairs(a, b)) k = std::max(k, table.p[a][b].kn);
     return k;
   }
 };

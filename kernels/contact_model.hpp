@@ -36,6 +36,18 @@ struct ContactModel {
   Normal normal;
   Tangential tangential;
   Rolling rolling;
+  // The normal force of the Coulomb limits (docs/contact_laws.md): false, |f_n| of the total
+  // force, elastic plus dashpot, as dem.md writes it (the default); true, the elastic part
+  // alone. They differ while a damped contact is tensile at its end: over a whole impact the
+  // dashpot's impulse vanishes, so with the elastic part gross sliding transfers exactly
+  // mu J_n, with the total force mu (J_n + 2 J_tensile).
+  bool coulomb_elastic_normal = false;
+
+  // The normal force the Coulomb limits use (the total force fn, or its elastic part).
+  KOKKOS_INLINE_FUNCTION double coulomb_normal(const PairState& s, const double* h,
+                                               double fn) const {
+    return coulomb_elastic_normal ? normal.elastic_force(s, h + normal_offset) : fn;
+  }
 
   // Full evaluation for one step of length dt: advances the history in h.
   KOKKOS_INLINE_FUNCTION void evaluate(const PairState& s, double dt, double* h,
@@ -43,7 +55,7 @@ struct ContactModel {
     out.fn = normal.force(s, h + normal_offset);
     for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
     if constexpr (Tangential::active) {
-      tangential.force(s, out.fn, dt, h + tangential_offset, out.ft);
+      tangential.force(s, coulomb_normal(s, h, out.fn), dt, h + tangential_offset, out.ft);
       for (int d = 0; d < 3; ++d) out.f[d] += out.ft[d];
       // The contact point sits mid-overlap: lever arm -(a_i - delta/2) n from i (force ft)
       // and +(a_j - delta/2) n from j (force -ft); the torques then balance exactly.
@@ -54,7 +66,7 @@ struct ContactModel {
     }
     if constexpr (Rolling::active) {
       double qr[3] = {0, 0, 0};
-      rolling.torque(s, out.fn, dt, h + rolling_offset, qr);
+      rolling.torque(s, coulomb_normal(s, h, out.fn), dt, h + rolling_offset, qr);
       for (int d = 0; d < 3; ++d) out.q[d] += qr[d], out.qj[d] -= qr[d];
     }
   }
@@ -76,13 +88,16 @@ struct ContactModel {
   }
 
   // Host-side facts for the guards.
-  double stiffness(double delta_ref, double length_max) const {
-    double k = normal.stiffness(delta_ref, length_max);
-    if constexpr (Tangential::active) k = std::max(k, tangential.stiffness(delta_ref, length_max));
+  double stiffness(double delta_ref, double length_max,
+                   const PairMask& pairs = PairMask::all()) const {
+    double k = normal.stiffness(delta_ref, length_max, pairs);
+    if constexpr (Tangential::active)
+      k = std::max(k, tangential.stiffness(delta_ref, length_max, pairs));
     return k;
   }
-  double shortest_duration(double m, double delta_ref, double length_max) const {
-    return normal.shortest_duration(m, delta_ref, length_max);
+  double shortest_duration(double m, double delta_ref, double length_max,
+                           const PairMask& pairs = PairMask::all()) const {
+    return normal.shortest_duration(m, delta_ref, length_max, pairs);
   }
 };
 

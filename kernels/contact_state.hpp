@@ -22,6 +22,28 @@ struct PairTable {
   }
 };
 
+// Which species pairs the time-step guard considers: those that can touch in the scene
+// (a species with a single particle cannot touch itself; a wall touches only particles).
+struct PairMask {
+  bool on[kMaxSpecies][kMaxSpecies];
+  static PairMask all() { return filled(true); }
+  static PairMask none() { return filled(false); }
+  static PairMask only(int a, int b) {
+    PairMask m = none();
+    m.on[a][b] = m.on[b][a] = true;
+    return m;
+  }
+  bool operator()(int a, int b) const { return on[a][b]; }
+
+ private:
+  static PairMask filled(bool v) {
+    PairMask m;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) m.on[a][b] = v;
+    return m;
+  }
+};
+
 struct PairState {
   double n[3];       // unit normal, from j towards i
   double delta;      // overlap (> 0 in contact)
@@ -63,11 +85,21 @@ KOKKOS_INLINE_FUNCTION double norm3(const double a[3]) {
 // The spring was in last step's plane, so the normal part x = (s.n)^2/|s|^2 is tiny and the
 // restoring factor 1/sqrt(1 - x) is its Taylor series (exact to round-off for x < 1e-4):
 // no square root in the common case.
+// A spring that lies along the normal (x within kSpringAlongNormal of 1, i.e. within about
+// 1e-3 rad of n) has no direction left in the plane: its in-plane part is round-off (a head-on
+// impact builds such a spring from the round-off of v_t, n = r/|r| being unit only to
+// round-off), and restoring its length would divide by sqrt(1 - x) ~ 0, or take the root of
+// a negative number where |n| > 1 makes x > 1. Such a spring is released (set to zero).
+constexpr double kSpringAlongNormal = 1e-6;
 KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
   const double len_sq = dot3(s, s);
   if (len_sq == 0.0) return;
   const double sn = dot3(s, n);
   const double x = sn * sn / len_sq;
+  if (!(x < 1.0 - kSpringAlongNormal)) {  // also catches x = NaN from an inf spring
+    for (int d = 0; d < 3; ++d) s[d] = 0.0;
+    return;
+  }
   const double scale = x < 1e-4 ? 1.0 + x * (0.5 + x * (0.375 + x * 0.3125))
                                 : 1.0 / Kokkos::Experimental::sqrt(1.0 - x);
   for (int d = 0; d < 3; ++d) s[d] = (s[d] - sn * n[d]) * scale;
@@ -78,8 +110,20 @@ KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
 // the trial direction and the spring is shortened to match it. Returns the force in f.
 // mu_s = infinity never slips. The limit uses |fn| as the spec writes it (the normal force
 // includes its dashpot, which is briefly tensile at the end of a damped collision).
+//
+// The spring after a slip (docs/contact_laws.md, "Slip reset"). With keep_dashpot the spring
+// also holds the dashpot's share, s = -(f + g v)/k (Luding's reset, as LAMMPS and MercuryDPM
+// write it), so that the trial force of the same step is exactly f. That is consistent only
+// while the next step evaluates the law with the same ratio g/k: the next trial force is then
+// (k'/k)(f + g (v - v')) - k' v' dt, which opposes the slip (constant laws; the L-delta
+// Mindlin laws, whose k and g both scale with sqrt(L delta)). Where g/k changes with the
+// overlap (the restitution-damped Mindlin law, g ~ sqrt(k)), the stored share (k'/k) g v
+// outgrows the new dashpot g' v, and while the dashpot alone exceeds the Coulomb force the
+// friction pushes along the slip. Without keep_dashpot the spring holds the elastic force
+// only, s = -f/k: the next trial force (k'/k) f - k' v dt - g' v then opposes the slip.
 KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], double k, double g,
-                                           double mu_s, double mu_d, double fn, double f[3]) {
+                                           double mu_s, double mu_d, double fn, double f[3],
+                                           bool keep_dashpot = true) {
   for (int d = 0; d < 3; ++d) f[d] = -k * s[d] - g * v[d];
   const double f_sq = dot3(f, f);
   const double afn = fn < 0.0 ? -fn : fn;
@@ -90,9 +134,10 @@ KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], doubl
   const double fmag = Kokkos::Experimental::sqrt(f_sq);
   const double slide = mu_d * afn;
   const double scale = fmag > 0.0 ? slide / fmag : 0.0;
+  const double gs = keep_dashpot ? g : 0.0;
   for (int d = 0; d < 3; ++d) {
     f[d] *= scale;
-    s[d] = k > 0.0 ? -(f[d] + g * v[d]) / k : 0.0;
+    s[d] = k > 0.0 ? -(f[d] + gs * v[d]) / k : 0.0;
   }
   return true;
 }

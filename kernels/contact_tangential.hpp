@@ -59,7 +59,9 @@ struct CoulombTangential {
         q.law == MindlinRestitution ? q.gt * Kokkos::Experimental::sqrt(s.mstar * k) : q.gt * c;
     rotate_into_plane(h, s.n);
     for (int d = 0; d < 3; ++d) h[d] += s.vt[d] * dt;
-    return coulomb_spring(h, s.vt, k, g, q.mu_s, q.mu_d, fn, f);
+    // The restitution law's g/k changes with the overlap: its spring keeps no dashpot share
+    // after a slip (coulomb_spring).
+    return coulomb_spring(h, s.vt, k, g, q.mu_s, q.mu_d, fn, f, q.law != MindlinRestitution);
   }
   // Elastic (spring) part only, from the stored spring, without advancing it (the same
   // spring k_t for every law: damping never enters).
@@ -75,10 +77,12 @@ struct CoulombTangential {
     const Params& q = table(s.si, s.sj);
     return 0.5 * q.kt * scale(q, s) * dot3(h, h);
   }
-  double stiffness(double delta_ref, double length_max) const {
+  double stiffness(double delta_ref, double length_max,
+                   const PairMask& pairs = PairMask::all()) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b) {
+        if (!pairs(a, b)) continue;
         const Params& q = table.p[a][b];
         k = std::max(k, q.kt * (q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref)));
       }

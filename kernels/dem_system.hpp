@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -34,6 +35,8 @@ struct DemParams {
   int rattler_threshold = 3;
   double max_overlap = 0.3;       // delta / min(a_i, a_j) above which the run is stopped
   double dt_guard = 0.1;          // dt must not exceed this fraction of the shortest collision
+  std::string dt_key = "dt";      // the scene key of dt, named by the guard's advice
+  std::string dt_hint;            // or, where dt is derived, what to change instead
   bool sort = true;               // reorder particles in cell order at every rebuild (locality)
   long rebuild_every = 0;         // > 0: rebuild the neighbour list every this many steps, whatever
                                   // the skin criterion says (tests, benchmarks of flowing systems)
@@ -579,23 +582,53 @@ class DemSystem {
     }
   }
 
-  // The stiffest, lightest pair sets the shortest collision; dt must resolve it.
+  // The stiffest, lightest contact that can occur sets the shortest collision; dt must
+  // resolve it. Each species pair that can touch is guarded with its own lightest reduced
+  // mass: a pair needs a particle of each species (two of a species for a like pair), a wall
+  // touches particles only. A pair that cannot occur (a stiff target sphere alone) is not
+  // guarded.
   void check_time_step() const {
     if (p_.n < 1 || (p_.n < 2 && walls_.size() == 0)) return;
     auto mass = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.mass);
-    std::vector<double> m(mass.data(), mass.data() + p_.n);
-    std::partial_sort(m.begin(), m.begin() + std::min(2, p_.n), m.end());
-    // A wall is a partner of infinite mass: its contacts see the lightest mass itself.
-    const double m_red = walls_.size() > 0 ? m[0] : m[0] * m[1] / (m[0] + m[1]);
-    const double tc = model_.shortest_duration(m_red, params_.max_overlap * a_min_, 2 * a_max_);
+    auto species = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.species);
+    // The two lightest masses of each species (infinity where there are fewer particles).
+    constexpr double none = std::numeric_limits<double>::infinity();
+    double light[kMaxSpecies][2];
+    for (auto& l : light) l[0] = l[1] = none;
+    for (int i = 0; i < p_.n; ++i) {
+      double* l = light[species(i)];
+      if (mass(i) < l[0])
+        l[1] = l[0], l[0] = mass(i);
+      else if (mass(i) < l[1])
+        l[1] = mass(i);
+    }
+    const double delta_ref = params_.max_overlap * a_min_, length_max = 2 * a_max_;
+    double tc = none, k_worst = 0, m_worst = 0;
+    auto guard = [&](int a, int b, double m_red) {
+      const PairMask pair = PairMask::only(a, b);
+      const double t = model_.shortest_duration(m_red, delta_ref, length_max, pair);
+      if (t < tc) tc = t, k_worst = model_.stiffness(delta_ref, length_max, pair), m_worst = m_red;
+    };
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = a; b < kMaxSpecies; ++b) {
+        const double ma = light[a][0], mb = a == b ? light[a][1] : light[b][0];
+        if (ma < none && mb < none) guard(a, b, ma * mb / (ma + mb));
+      }
+    // A wall is a partner of infinite mass: its contacts see the particle's mass itself.
+    for (const WallSpec& w : walls_.specs())
+      for (int a = 0; a < kMaxSpecies; ++a)
+        if (light[a][0] < none) guard(a, w.material, light[a][0]);
     if (params_.dt > params_.dt_guard * tc) {
       std::ostringstream msg;
       msg.precision(4);
       msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard << " = "
-          << params_.dt_guard * tc << " for the stiffest, lightest pair (stiffness "
-          << model_.stiffness(params_.max_overlap * a_min_, 2 * a_max_) << ", reduced mass "
-          << m_red << ", contact duration " << tc << "): set dt <= " << params_.dt_guard * tc
-          << " (t_c/50 = " << tc / 50 << " is the usual choice)";
+          << params_.dt_guard * tc << " for the stiffest, lightest contact of the scene (stiffness "
+          << k_worst << ", reduced mass " << m_worst << ", contact duration " << tc << "): ";
+      if (params_.dt_hint.empty())
+        msg << "set " << params_.dt_key << " <= " << params_.dt_guard * tc
+            << " (t_c/50 = " << tc / 50 << " is the usual choice)";
+      else
+        msg << params_.dt_hint;
       throw PhysicsError(msg.str());
     }
   }

@@ -97,7 +97,8 @@ KOKKOS_INLINE_FUNCTION void evaluate_with_normal_overlap(const Model& m, const P
   out.fn = m.normal.force(sn, h + Model::normal_offset);
   for (int d = 0; d < 3; ++d) out.f[d] = out.fn * s.n[d];
   if constexpr (Model::tangential_type::active) {
-    m.tangential.force(s, out.fn, dt, h + Model::tangential_offset, out.ft);
+    m.tangential.force(s, m.coulomb_normal(sn, h, out.fn), dt, h + Model::tangential_offset,
+                       out.ft);
     for (int d = 0; d < 3; ++d) out.f[d] += out.ft[d];
     double nxf[3];
     cross3(s.n, out.ft, nxf);
@@ -106,7 +107,7 @@ KOKKOS_INLINE_FUNCTION void evaluate_with_normal_overlap(const Model& m, const P
   }
   if constexpr (Model::rolling_type::active) {
     double qr[3] = {0, 0, 0};
-    m.rolling.torque(s, out.fn, dt, h + Model::rolling_offset, qr);
+    m.rolling.torque(s, m.coulomb_normal(sn, h, out.fn), dt, h + Model::rolling_offset, qr);
     for (int d = 0; d < 3; ++d) out.q[d] += qr[d], out.qj[d] -= qr[d];
   }
 }

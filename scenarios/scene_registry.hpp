@@ -48,6 +48,7 @@ void run_two_particle_linear(const SceneFile&, const RunOptions&);
 void run_isotropic_compression(const SceneFile&, const RunOptions&);
 void run_hysteretic_collision(const SceneFile&, const RunOptions&);
 void run_impact(const SceneFile&, const RunOptions&);
+void run_impact_benchmarks(const SceneFile&, const RunOptions&);
 void run_soft_collision(const SceneFile&, const RunOptions&);
 void run_confined_compression(const SceneFile&, const RunOptions&);
 void run_elastic_moduli(const SceneFile&, const RunOptions&);

@@ -48,8 +48,14 @@ TEST(ImpactScene, ShippedGlassOnSteelReboundsAsItsClosedForms) {
       continue;
     }
     ++slid;
-    // |f_n| in the Coulomb limit includes the brief tensile dashpot force at the end.
-    EXPECT_NEAR(ratio[k] / mu, 1.0, 2e-3) << k;
+    // |f_n| in the Coulomb limit includes the brief tensile dashpot force at the end: while
+    // sliding J_t = mu sum |f_n| dt, so J_t / (mu J_n) = sum |f_n| / sum f_n (0.2 % above 1 at
+    // e = 0.9), from the recorded normal force of the same impact.
+    const auto fn = r.reals("/oblique/case_" + std::to_string(k) + "/normal_force");
+    double total = 0, absolute = 0;
+    for (double f : fn) total += f, absolute += std::fabs(f);
+    EXPECT_GT(absolute / total, 1.0) << k;
+    EXPECT_NEAR(ratio[k] / mu, absolute / total, 2e-3) << k;
     EXPECT_NEAR(spin[k] / spin_cf[k], 1.0, 5e-3) << k;
     EXPECT_NEAR(angle[k], angle_cf[k], 0.05) << k;
   }

@@ -341,21 +341,21 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     run["analysis_end_time"] = times[s_end];
     run["source_residual_ratio_of_ensemble_means"] = residual / energy0;
     run["source_residual_mean_of_realization_fractions"] = residual_ratio;
-    run["near_source_decay_per_bead"] = decay_rate;
+    run["near_source_decay_per_bead"] = Json::or_null(decay_rate);
     run["near_source_beads"] = std::vector<double>{0.0, dist.back()};
     run["localization_length_beads"] = decay_rate > 0 ? Json(1.0 / decay_rate) : Json();
     Json far = Json::object();
     far["beads"] = std::vector<double>{1.0, static_cast<double>(far_end)};
     far["points"] = static_cast<double>(dist_far.size());
-    far["power_law_exponent"] = -far_pow.exponent;  // <TE_p> ~ d^-alpha
-    far["power_law_exponent_stderr"] = far_pow.exponent_stderr;
-    far["power_law_rms_log_residual"] = far_pow.rms_log_residual;
-    far["exponential_decay_per_bead"] = -far_exp.exponent;
-    far["exponential_rms_log_residual"] = far_exp.rms_log_residual;
+    far["power_law_exponent"] = Json::or_null(-far_pow.exponent);  // <TE_p> ~ d^-alpha
+    far["power_law_exponent_stderr"] = Json::or_null(far_pow.exponent_stderr);
+    far["power_law_rms_log_residual"] = Json::or_null(far_pow.rms_log_residual);
+    far["exponential_decay_per_bead"] = Json::or_null(-far_exp.exponent);
+    far["exponential_rms_log_residual"] = Json::or_null(far_exp.rms_log_residual);
     run["decay_over_long_range"] = far;
     run["centre_of_energy_distance_at_t_max"] = centre.back() - source;
     run["width2_at_t_max"] = width2.back();
-    run["width2_growth_exponent"] = exponent;
+    run["width2_growth_exponent"] = Json::or_null(exponent);  // too few points: undefined
     run["exponent_fit_window"] = std::vector<double>{0.5 * t_end, times[s_end]};
     run["front_reaches_far_end_at"] = t_front;
     run["max_relative_energy_drift"] = *std::max_element(drift.begin(), drift.end());
@@ -382,11 +382,13 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   summary["runs"] = runs;
   // Late-time source energy against disorder, a power law over the xi > 0 runs.
   Json against_xi = Json::object();
-  against_xi["ratio_of_ensemble_means"] = fit_power_law(xis, residual_means).exponent;
-  against_xi["mean_of_realization_fractions"] = fit_power_law(xis, residual_ratios).exponent;
+  against_xi["ratio_of_ensemble_means"] =
+      Json::or_null(fit_power_law(xis, residual_means).exponent);
+  against_xi["mean_of_realization_fractions"] =
+      Json::or_null(fit_power_law(xis, residual_ratios).exponent);
   summary["source_residual_exponent_vs_xi"] = against_xi;
   summary["wall_seconds"] = total_clock.seconds();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("chain_impulse.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -408,7 +408,7 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   cost["per_xi"] = cost_runs;
   summary["cost_for_realistic_use"] = cost;
   summary["wall_seconds"] = total_clock.seconds();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("chain_master_equation.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -298,7 +298,7 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
       "N = 4r sits at the upper edge of band r - 1 and a band centre (wave.bands) mid-band";
   summary["runs"] = runs_json;
   summary["wall_seconds"] = clock.seconds();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("chain_tones.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -6,8 +6,11 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string>
 #include <vector>
 
+#include "core/finite.hpp"
 #include "core/walls.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
@@ -25,7 +28,12 @@ struct ImpactSetup {
   double speed = 1.0;  // impact speed
   double angle = 0.0;  // incidence angle from the normal (radians): v = speed (sin, 0, -cos)
   double spin[3] = {0, 0, 0};  // initial angular velocity of the moving sphere
+  // The target sphere's own motion (not with a wall); `speed` and `angle` then give the
+  // velocity of the moving sphere relative to it.
+  double target_velocity[3] = {0, 0, 0};
+  double target_spin[3] = {0, 0, 0};
   double dt = 1e-3;
+  std::string dt_hint;                  // the time-step guard's advice (scene key to change)
   bool record = false;                  // keep the time series
   SnapshotSeries* snapshots = nullptr;  // frames for ParaView (the series decides when)
 };
@@ -44,7 +52,14 @@ struct ImpactResult {
   double impulse_normal = 0, impulse_tangential = 0;  // on the moving sphere (along +z, +x)
   bool separated = false;
   long steps = 0;
-  std::vector<double> t, overlap, force_normal, force_tangential;
+  // Per step while recording: time, overlap, force on the moving sphere along the normal and
+  // along x, and the slip velocity of the contact points along x (v_c); in the contact's own
+  // frame (n from the target to the moving sphere: the pair's normal turns as the spheres
+  // pass each other), the normal force f.n, the tangential force's magnitude and its power
+  // on the slip, f_t . v_c (negative while friction opposes the slip).
+  std::vector<double> t, overlap, force_normal, force_tangential, slip;
+  std::vector<double> contact_normal_force, contact_tangential_force, friction_power,
+      contact_slip_speed;
 };
 
 template <class ExecSpace, class Model>
@@ -57,9 +72,14 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
   HostParticles h;
   h.resize(n);
   h.x[0] = 0, h.y[0] = 0, h.z[0] = reach + gap;
-  h.vx[0] = s.speed * sn, h.vy[0] = 0, h.vz[0] = -s.speed * c;
+  const double u[3] = {s.wall ? 0.0 : s.target_velocity[0], s.wall ? 0.0 : s.target_velocity[1],
+                       s.wall ? 0.0 : s.target_velocity[2]};
+  h.vx[0] = u[0] + s.speed * sn, h.vy[0] = u[1], h.vz[0] = u[2] - s.speed * c;
   h.radius[0] = a1, h.density[0] = s.density1, h.species[0] = s.species1;
-  if (!s.wall) h.radius[1] = a2, h.density[1] = s.density2, h.species[1] = s.species2;
+  if (!s.wall) {
+    h.radius[1] = a2, h.density[1] = s.density2, h.species[1] = s.species2;
+    h.vx[1] = u[0], h.vy[1] = u[1], h.vz[1] = u[2];
+  }
 
   // A closed box far larger than the contact: no periodic images, cells cover the scene.
   PeriodicBox box;
@@ -67,6 +87,7 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
   for (int d = 0; d < 3; ++d) box.lo[d] = -0.5 * edge, box.len[d] = edge, box.periodic[d] = false;
   DemParams params;
   params.dt = s.dt;
+  params.dt_hint = s.dt_hint;
   params.skin = 0.1 * reach;
   params.max_overlap = 1.0;
   params.sort = false;  // the harness addresses the spheres as particles 0 and 1
@@ -80,7 +101,10 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
   }
   {
     auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().w);
-    for (int d = 0; d < 3; ++d) w(0, d) = s.spin[d];
+    for (int d = 0; d < 3; ++d) {
+      w(0, d) = s.spin[d];
+      if (!s.wall) w(1, d) = s.target_spin[d];
+    }
     Kokkos::deep_copy(sys.particles().w, w);
     sys.refresh_forces();
   }
@@ -130,6 +154,16 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
     if (s.snapshots) s.snapshots->sample(sys);
     k = kin();
     const double t = step * s.dt;
+    // A NaN must stop the impact, not end it: a NaN overlap reads as "separated".
+    for (int i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) {
+        static const char* axis[] = {"x", "y", "z"};
+        const std::string who = " of sphere " + std::to_string(i + 1) + " along " + axis[d];
+        require_finite(xh(i, d), "position" + who, step, t);
+        require_finite(vh(i, d), "velocity" + who, step, t);
+        require_finite(wh(i, d), "angular velocity" + who, step, t);
+        require_finite(fh(i, d), "force" + who, step, t);
+      }
     const double fz = fh(0, 2), fx = fh(0, 0);
     if (k.overlap > 0) {
       r.max_overlap = std::max(r.max_overlap, k.overlap);
@@ -140,6 +174,36 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
       r.overlap.push_back(k.overlap);
       r.force_normal.push_back(k.overlap > 0 ? fz : 0.0);
       r.force_tangential.push_back(k.overlap > 0 ? fx : 0.0);
+      r.slip.push_back(k.vc);
+      // The contact frame: n, the levers a - delta/2 as in the kernels.
+      double n[3], f[3], vc[3];
+      double len = 0;
+      for (int d = 0; d < 3; ++d) {
+        n[d] = s.wall ? (d == 2 ? 1.0 : 0.0) : xh(0, d) - xh(1, d);
+        len += n[d] * n[d];
+      }
+      len = std::sqrt(len);
+      double fn = 0;
+      for (int d = 0; d < 3; ++d) n[d] /= len, f[d] = fh(0, d), fn += f[d] * n[d];
+      const double ov = std::max(k.overlap, 0.0);
+      const double l1 = a1 - 0.5 * ov, l2 = s.wall ? 0.0 : a2 - 0.5 * ov;
+      for (int d = 0; d < 3; ++d) {
+        const int e1 = (d + 1) % 3, e2 = (d + 2) % 3;
+        // v + w x (-l1 n) for sphere 1, v + w x (l2 n) for the target.
+        const double c1 = -l1 * (wh(0, e1) * n[e2] - wh(0, e2) * n[e1]);
+        const double v2 = s.wall ? 0.0 : vh(1, d) + l2 * (wh(1, e1) * n[e2] - wh(1, e2) * n[e1]);
+        vc[d] = vh(0, d) + c1 - v2;
+      }
+      const double vcn = vc[0] * n[0] + vc[1] * n[1] + vc[2] * n[2];
+      double ft2 = 0, power = 0, slip2 = 0;
+      for (int d = 0; d < 3; ++d) {
+        const double ft = f[d] - fn * n[d], vt = vc[d] - vcn * n[d];
+        ft2 += ft * ft, power += ft * vt, slip2 += vt * vt;
+      }
+      r.contact_normal_force.push_back(k.overlap > 0 ? fn : 0.0);
+      r.contact_tangential_force.push_back(k.overlap > 0 ? std::sqrt(ft2) : 0.0);
+      r.friction_power.push_back(k.overlap > 0 ? power : 0.0);
+      r.contact_slip_speed.push_back(std::sqrt(slip2));
     }
     if (t_start < 0 && prev <= 0 && k.overlap > 0)
       t_start = t - s.dt * k.overlap / (k.overlap - prev);
@@ -152,6 +216,14 @@ ImpactResult impact(const Model& model, const ImpactSetup& s) {
     prev = k.overlap;
   }
   if (s.snapshots) s.snapshots->finish(sys);
+  if (!r.separated) {
+    std::ostringstream msg;
+    msg << "the impact at speed " << s.speed << " and incidence " << s.angle * 180.0 / M_PI
+        << " deg did not end within " << max_steps << " steps (200 undamped contact times): "
+        << (t_start < 0 ? "the spheres never touched" : "the spheres stayed in contact")
+        << "; check the materials' stiffness and restitution";
+    throw PhysicsError(msg.str());
+  }
   r.duration = r.separated ? t_end - t_start : 0.0;
   r.vn_out = -k.vn, r.vt_out = k.vt, r.vc_out = k.vc, r.spin_out = k.spin;
   r.restitution_normal = r.vn_in != 0 ? r.vn_out / r.vn_in : 0.0;

@@ -67,7 +67,7 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "k2", k2);
   h5.commit();
   summary["cases"] = cases;
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("hysteretic_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

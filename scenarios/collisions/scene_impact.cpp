@@ -9,9 +9,11 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/finite.hpp"
 #include "core/output.hpp"
 #include "core/restitution.hpp"
 #include "scenarios/collisions/impact.hpp"
+#include "scenarios/collisions/impact_closed_forms.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -65,18 +67,6 @@ ImpactScene read_scene(const SceneFile& s) {
   return c;
 }
 
-// Elastic Hertz closed forms for an impact at normal speed v.
-struct HertzClosedForm {
-  double duration, overlap, force;
-};
-HertzClosedForm hertz_closed_form(double estar, double rstar, double mstar, double v) {
-  const double kh = 4.0 / 3.0 * estar * std::sqrt(rstar);
-  const double dmax = std::pow(1.25 * mstar * v * v / kh, 0.4);
-  // t_c = (2 delta_max / v) Int_0^1 (1 - x^{5/2})^{-1/2} dx = 2.94 delta_max / v
-  const double integral = std::tgamma(0.4) * std::tgamma(0.5) / std::tgamma(0.9) / 2.5;
-  return {2.0 * dmax / v * integral, dmax, kh * std::pow(dmax, 1.5)};
-}
-
 template <class Model>
 ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, double angle_deg,
                       bool record, double estar, double rstar, double mstar,
@@ -91,6 +81,7 @@ ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, do
   s.spin[1] = c.spin * speed / c.radius;
   const double vn = speed * std::cos(s.angle);
   s.dt = hertz_closed_form(estar, rstar, mstar, vn).duration / c.steps_per_contact;
+  s.dt_hint = "raise impact.steps_per_contact (now " + std::to_string(c.steps_per_contact) + ")";
   s.record = record;
   s.snapshots = snapshots;
   return impact<Kokkos::DefaultExecutionSpace>(model, s);
@@ -170,8 +161,8 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   };
   double worst_exact = 0, worst_common = 0;
   for (size_t k = 0; k < e_exact.size(); ++k) {
-    worst_exact = std::max(worst_exact, std::fabs(e_exact[k] - e_in));
-    worst_common = std::max(worst_common, std::fabs(e_common[k] - e_in));
+    worst_exact = max_keep_nan(worst_exact, std::fabs(e_exact[k] - e_in));
+    worst_common = max_keep_nan(worst_common, std::fabs(e_common[k] - e_in));
   }
   summary["restitution_error_exact_mapping"] = worst_exact;
   summary["restitution_error_common_mapping"] = worst_common;
@@ -254,7 +245,7 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "friction", mu);
   h5.attribute("/", "target", c.wall ? "wall" : "sphere");
   h5.commit();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("impact.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -92,7 +92,7 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   summary["max_rel_error_contact_duration"] = worst_tc;
   summary["max_rel_error_restitution"] = worst_e;
   summary["max_rel_momentum_change"] = worst_p;
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("two_particle_linear.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

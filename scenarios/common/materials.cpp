@@ -16,25 +16,32 @@ MaterialSet MaterialSet::read(const SceneFile& s) {
             "holds more materials than the " + std::to_string(kMaxSpecies) +
                 " species slots of the pair tables");
   for (const std::string& name : names) {
-    const std::string k = "materials." + name;
-    Material mat;
-    mat.name = name;
-    mat.young = s.real_or_infinite(k + ".young_modulus");
-    mat.poisson = s.real(k + ".poisson");
-    mat.density = s.real(k + ".density", 0.0);
-    mat.friction = s.real(k + ".friction", 0.0);
-    mat.restitution = s.real(k + ".restitution", 1.0);
-    s.require(mat.young > 0, k + ".young_modulus", "must be positive (inf: rigid)");
-    s.require(mat.poisson > -1 && mat.poisson < 0.5 + 1e-12, k + ".poisson",
-              "must lie in (-1, 0.5]");
-    s.require(mat.density >= 0 && std::isfinite(mat.density), k + ".density",
-              "must be a finite, non-negative number");
-    s.require(mat.friction >= 0, k + ".friction", "must not be negative (inf: no sliding)");
-    s.require(mat.restitution > 0 && mat.restitution <= 1, k + ".restitution",
-              "must lie in (0, 1]");
     m.slot[name] = static_cast<int>(m.materials.size());
-    m.materials.push_back(mat);
+    m.materials.push_back(Material::read(s, "materials." + name, name));
   }
+  m.read_contact(s);
+  return m;
+}
+
+Material Material::read(const SceneFile& s, const std::string& k, const std::string& name) {
+  Material mat;
+  mat.name = name;
+  mat.young = s.real_or_infinite(k + ".young_modulus");
+  mat.poisson = s.real(k + ".poisson");
+  mat.density = s.real(k + ".density", 0.0);
+  mat.friction = s.real(k + ".friction", 0.0);
+  mat.restitution = s.real(k + ".restitution", 1.0);
+  s.require(mat.young > 0, k + ".young_modulus", "must be positive (inf: rigid)");
+  s.require(mat.poisson > -1 && mat.poisson < 0.5 + 1e-12, k + ".poisson", "must lie in (-1, 0.5]");
+  s.require(mat.density >= 0 && std::isfinite(mat.density), k + ".density",
+            "must be a finite, non-negative number");
+  s.require(mat.friction >= 0, k + ".friction", "must not be negative (inf: no sliding)");
+  s.require(mat.restitution > 0 && mat.restitution <= 1, k + ".restitution", "must lie in (0, 1]");
+  return mat;
+}
+
+void MaterialSet::read_contact(const SceneFile& s) {
+  MaterialSet& m = *this;
   const std::string tangential = s.text("contact.tangential", "mindlin");
   s.require(tangential == "none" || tangential == "mindlin", "contact.tangential",
             "must be \"none\" or \"mindlin\"");
@@ -45,7 +52,10 @@ MaterialSet MaterialSet::read(const SceneFile& s) {
   m.pair_rule = s.text("contact.pair_rule", "harmonic");
   s.require(m.pair_rule == "harmonic" || m.pair_rule == "product_over_sum", "contact.pair_rule",
             "must be \"harmonic\" or \"product_over_sum\"");
-  return m;
+  const std::string limit = s.text("contact.coulomb_normal", "total");
+  s.require(limit == "total" || limit == "elastic", "contact.coulomb_normal",
+            "must be \"total\" (elastic + dashpot) or \"elastic\"");
+  m.coulomb_elastic = limit == "elastic";
 }
 
 MaterialSet MaterialSet::only(int s) const {

@@ -8,6 +8,8 @@
 //   [contact]          tangential = "none" | "mindlin"       (default "mindlin")
 //                      damping = "restitution_exact" | "restitution_common"  (default exact)
 //                      pair_rule = "harmonic" | "product_over_sum"           (default harmonic)
+//                      coulomb_normal = "total" | "elastic"  the normal force of the Coulomb
+//                      limit (default total: elastic + dashpot; docs/contact_laws.md)
 //
 // Pairs: 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j, 1/G* = (2 - nu_i)/G_i + (2 - nu_j)/G_j
 // with G = E/(2(1 + nu)); restitution and friction of unlike materials by the pair rule
@@ -27,6 +29,8 @@ struct Material {
   std::string name;
   double young = 0, poisson = 0, density = 0, friction = 0, restitution = 1;
   bool rigid() const { return young == std::numeric_limits<double>::infinity(); }
+  // The keys <key>.young_modulus, .poisson, .density, .friction, .restitution, checked.
+  static Material read(const SceneFile& scene, const std::string& key, const std::string& name);
 };
 
 struct MaterialSet {
@@ -35,8 +39,11 @@ struct MaterialSet {
   bool tangential = true;
   std::string damping = "restitution_exact";
   std::string pair_rule = "harmonic";
+  bool coulomb_elastic = false;  // Coulomb limit on the elastic normal force (ContactModel)
 
   static MaterialSet read(const SceneFile& scene);
+  // The [contact] options (tangential, damping, pair_rule) of the scene.
+  void read_contact(const SceneFile& scene);
   int at(const SceneFile& scene, const std::string& key) const;  // slot of the named material
   // The set with one material only (in slot 0), same contact options: a run that uses one
   // material gets its own time-step guard, not the stiffest and lightest of all pairs.
@@ -54,9 +61,12 @@ struct MaterialSet {
 // friction, or with the Mindlin tangential law.
 template <class F>
 void with_material_model(const MaterialSet& m, F&& f) {
-  if (m.tangential)
-    f(ContactModel<HertzRestitutionNormal, CoulombTangential>{m.normal(), m.tangential_law(), {}});
-  else
+  if (m.tangential) {
+    ContactModel<HertzRestitutionNormal, CoulombTangential> model{
+        m.normal(), m.tangential_law(), {}};
+    model.coulomb_elastic_normal = m.coulomb_elastic;
+    f(model);
+  } else
     f(ContactModel<HertzRestitutionNormal>{m.normal(), {}, {}});
 }
 

@@ -15,6 +15,7 @@ DemShearPath run_dem_pure_shear(const DemShearSpec& s) {
   PeriodicBox box;
   const HostParticles host = random_gas(s.gas, box);
   DemParams params;
+  params.dt_key = "shear.dt";
   params.dt = s.dt, params.skin = s.skin, params.max_overlap = s.max_overlap;
   params.damping.translational = s.damping_background;
   params.damping.rotational = s.damping_rotational;

@@ -413,7 +413,7 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("continuum_fit.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -155,7 +155,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   summary["states"] = states;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   summary["run"] = run_record(wall, "complete", "");
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("lammps_forces.py", opts.out_dir + "/results.h5", opts.out_dir);
   std::cout << "lammps_forces: " << ff.size() << " atoms, " << model.describe() << ", " << steps
             << " steps; outputs in " << opts.out_dir << "\n";

@@ -14,6 +14,7 @@ Setup read_setup(const SceneFile& scene) {
   s.start_from = scene.text("start.from", "");
   s.contact = ContactConfig::read(scene);
   s.params.dt = scene.real("run.dt");
+  s.params.dt_key = "run.dt";
   s.params.skin = scene.real("run.skin");
   s.params.damping.translational = scene.real("damping.background", 0.0);
   s.params.damping.rotational = scene.real("damping.rotational", 0.0);
@@ -170,6 +171,7 @@ Setup for_variant(const Setup& s, const PrepVariant& v) {
   const double scale = s.params.dt / v.dt;
   auto steps = [&](long n) { return std::max(1L, std::lround(static_cast<double>(n) * scale)); };
   r.params.dt = v.dt;
+  r.params.dt_key = "preparation.dt";
   r.strain_steps = steps(s.strain_steps);
   r.probe_relax = s.probe_relax > 0 ? steps(s.probe_relax) : 0;
   r.relax_max = steps(s.relax_max);

@@ -22,6 +22,7 @@
 #include <optional>
 
 #include "core/ensemble.hpp"
+#include "core/finite.hpp"
 #include "core/output.hpp"
 #include "core/progress.hpp"
 #include "scenarios/common/config_state.hpp"
@@ -238,7 +239,8 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
       const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
       for (size_t i = 0; i < jammed.size(); ++i)
-        if (jammed[i] > 0) worst_a = std::max(worst_a, a[i]), worst_r = std::max(worst_r, r[i]);
+        if (jammed[i] > 0)  // a NaN change is kept: it fails the check and stops the summary
+          worst_a = max_keep_nan(worst_a, a[i]), worst_r = max_keep_nan(worst_r, r[i]);
     }
     Json& hc = summary["halving_check"];
     hc = Json::object();
@@ -266,7 +268,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     }
     summary["size_scatter"] = sc;
   }
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary, {"table"});
   std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

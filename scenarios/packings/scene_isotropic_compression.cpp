@@ -92,6 +92,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
   DemParams params;
   params.dt = scene.real("run.dt");
+  params.dt_key = "run.dt";
   params.skin = scene.real("run.skin");
   params.damping.translational = scene.real("damping.background", 0.0);
   params.damping.rotational = scene.real("damping.rotational", 0.0);
@@ -258,14 +259,15 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   res["z_final"] = fin.z;
   res["z_corrected_final"] = fin.z_corrected;
   res["rattler_fraction_final"] = fin.rattlers / gas.count;
-  res["ekin_over_epot_final"] = fin.epot > 0 ? fin.ekin / fin.epot : NAN;
+  res["ekin_over_epot_final"] =
+      fin.epot > 0 ? Json(fin.ekin / fin.epot) : Json();  // undefined in a gas
   res["max_overlap_final"] = fin.max_overlap;
-  res["phi_pressure_onset"] = phi_onset;
+  res["phi_pressure_onset"] = std::isnan(phi_onset) ? Json() : Json(phi_onset);  // none reached
   res["neighbor_builds"] = sys.neighbor_list().builds();
   // Volumetric inertial number at the end of compression, I_v = rate <d> sqrt(rho / P).
-  res["inertial_number_final"] =
-      fin.pressure > 0 ? rate * d_mean * std::sqrt(gas.density / fin.pressure) : NAN;
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  res["inertial_number_final"] =  // undefined without pressure
+      fin.pressure > 0 ? Json(rate * d_mean * std::sqrt(gas.density / fin.pressure)) : Json();
+  write_summary(opts.out_dir + "/summary.json", summary);
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
   if (opts.charts)

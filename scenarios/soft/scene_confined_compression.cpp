@@ -124,6 +124,7 @@ ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, 
     mean_d += 2 * h.radius[i] / h.size();
   }
   DemParams prm;
+  prm.dt_key = "compression.time_step";
   prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
   prm.gravity[2] = -c.gravity;
   prm.damping.translational = mean_mass / c.damping_time;
@@ -202,6 +203,7 @@ template <class Model>
 Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const ConfigState& st,
                const std::string& label, const RunOptions& opts, H5Writer* snap) {
   DemParams prm;
+  prm.dt_key = "compression.time_step";
   prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
   prm.gravity[2] = -c.gravity;
   const double H = c.size[2];
@@ -338,7 +340,7 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   write_scene_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", "/snapshot", c.fill.count,
                    "/snapshot_walls", 6);
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("confined_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -129,7 +129,7 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
   summary["runs"] = runs;
   h5.attribute("/", "radius", a);
   h5.commit();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts) run_plot_script("soft_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -35,6 +35,7 @@
 #include <optional>
 
 #include "core/ensemble.hpp"
+#include "core/finite.hpp"
 #include "core/output.hpp"
 #include "core/progress.hpp"
 #include "core/rng.hpp"
@@ -155,6 +156,7 @@ Setup read_setup(const SceneFile& s) {
   s.require(u.relax_crossings >= 0, "probe.relax_crossings", "must not be negative");
 
   u.params.dt = s.real("run.dt");
+  u.params.dt_key = "run.dt";
   u.params.skin = s.real("run.skin");
   u.params.max_overlap = s.real("run.max_overlap", 0.3);
   u.params.rattler_threshold = static_cast<int>(s.integer("run.rattler_threshold", 4));
@@ -433,9 +435,11 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
     for (const auto& [name, y] : series) {
       const PowerLawFit f = fit_power_law(P, *y);
       Json fj = Json::object();
-      fj["points"] = f.points, fj["exponent"] = f.exponent;
-      fj["exponent_stderr"] = f.exponent_stderr, fj["prefactor_MPa"] = f.prefactor;
-      fj["rms_log_residual"] = f.rms_log_residual;
+      // A fit of too few points (one: no exponent; two: no spread) is undefined, not failed.
+      fj["points"] = f.points, fj["exponent"] = Json::or_null(f.exponent);
+      fj["exponent_stderr"] = Json::or_null(f.exponent_stderr);
+      fj["prefactor_MPa"] = Json::or_null(f.prefactor);
+      fj["rms_log_residual"] = Json::or_null(f.rms_log_residual);
       j[std::string("fit_") + name] = fj;
       fit_cols[std::string(name) + "_exponent"].push_back(f.exponent);
       fit_cols[std::string(name) + "_exponent_stderr"].push_back(f.exponent_stderr);
@@ -468,11 +472,13 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
       }
       Json e = Json::object();
       e["pressure_target"] = p;
-      e["M_rule"] = M_main, e["pressure_rule"] = P_main;
-      e["M_other_rule_same_packing"] = M_same;
-      e["ratio_same_packing"] = M_same / M_main;
-      e["M_other_rule_own_packing"] = M_own, e["pressure_other_rule"] = P_own;
-      e["ratio_own_packing"] = M_own / M_main;
+      // A state the check did not reach (unjammed, or no such row) has no modulus: null.
+      e["M_rule"] = Json::or_null(M_main), e["pressure_rule"] = Json::or_null(P_main);
+      e["M_other_rule_same_packing"] = Json::or_null(M_same);
+      e["ratio_same_packing"] = Json::or_null(M_same / M_main);
+      e["M_other_rule_own_packing"] = Json::or_null(M_own);
+      e["pressure_other_rule"] = Json::or_null(P_own);
+      e["ratio_own_packing"] = Json::or_null(M_own / M_main);
       list.push(e);
     }
     rule["by_pressure"] = list;
@@ -547,9 +553,11 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   double lo = INFINITY, hi = -INFINITY;
   for (size_t i = 0; i < rows; ++i)
     if (T.at("jammed")[i] > 0)
-      lo = std::min(lo, T.at("M_over_M_KG")[i]), hi = std::max(hi, T.at("M_over_M_KG")[i]);
-  summary["M_over_K_plus_4G_3_range"] = std::vector<double>{lo, hi};
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+      lo = -max_keep_nan(-lo, -T.at("M_over_M_KG")[i]),
+      hi = max_keep_nan(hi, T.at("M_over_M_KG")[i]);
+  summary["M_over_K_plus_4G_3_range"] =  // null when no configuration jammed
+      lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
+  write_summary(opts.out_dir + "/summary.json", summary, {"table"});
   std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("mixture_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -226,7 +226,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
   }
   h5.attribute("/", "synthetic", synthetic ? 1.0 : 0.0);
   h5.commit();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("signal_analysis.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -94,6 +94,7 @@ double mean_mass_of(const ConfigState& c) {
 
 DemParams params_of(const WaveSetup& w, double damping_time, double mass) {
   DemParams p;
+  p.dt_key = "run.dt";
   p.dt = w.dt, p.skin = 0.05 * w.diameter, p.max_overlap = w.max_overlap;
   p.damping.translational = damping_time > 0 ? mass / damping_time : 0.0;
   p.damping.rotational =
@@ -587,7 +588,7 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   h5.commit();
-  write_text_file(opts.out_dir + "/summary.json", summary.dump());
+  write_summary(opts.out_dir + "/summary.json", summary);
   if (opts.charts)
     run_plot_script("wave_transmission.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
