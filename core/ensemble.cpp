@@ -2,7 +2,10 @@
 // blobs of any size; rank 0 always receives in rank order, never in arrival order.
 #include "core/ensemble.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -101,6 +104,18 @@ void finalize() {
 
 int rank() { return g_rank; }
 std::string prefix() { return g_size > 1 ? "rank " + std::to_string(g_rank) + ": " : ""; }
+
+void say(const std::string& line) {
+  std::cerr.flush();
+  const std::string text = line + "\n";
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(2, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    done += static_cast<size_t>(n);
+  }
+}
 int local_rank() {
   for (const char* v : {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "SLURM_LOCALID"})
     if (const char* x = std::getenv(v)) return std::atoi(x);

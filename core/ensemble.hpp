@@ -26,6 +26,10 @@ inline bool root() { return rank() == 0; }
 int local_rank();
 // "rank r: " in a run of several ranks (for messages and progress lines), "" otherwise.
 std::string prefix();
+// Writes `line` (a newline is added) to standard error in one write: a rank's message is
+// never cut by another process's output (an MPI launcher's abort banner) landing between
+// its pieces.
+void say(const std::string& line);
 bool built_with_mpi();
 // Ends every rank of the run at once (MPI_Abort), so that one rank's failure never leaves
 // the others waiting for it; a single process just exits.

@@ -84,6 +84,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
       std::string w1, w2, w3;
       std::istringstream tt(s);
       if ((tt >> a >> b >> c >> w1 >> w2 >> w3) && w1 == "xy" && w2 == "xz" && w3 == "yz") {
+        if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c))
+          fail("the tilt factors xy xz yz must be finite numbers");
         out.tilt[0] = a * length_scale, out.tilt[1] = b * length_scale;
         out.tilt[2] = c * length_scale;
       } else if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
@@ -93,6 +95,8 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
           fail("'atom types' needs a positive count");
       } else if ((ss >> a >> b >> w1 >> w2) && (w1 == "xlo" || w1 == "ylo" || w1 == "zlo")) {
         const int d = w1[0] - 'x';
+        if (!std::isfinite(a) || !std::isfinite(b) || !(b > a))
+          fail("the box bounds " + w1 + " " + w2 + " must be finite with " + w2 + " > " + w1);
         out.lo[d] = a * length_scale;
         out.len[d] = (b - a) * length_scale;
       }
@@ -104,6 +108,10 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     if (!(ss >> id)) fail("expected an atom id");
     while (ss >> x) v.push_back(x);
     if (!ss.eof()) fail("not a number: '" + s + "'");
+    // Positions, sizes and velocities enter cell indices and time steps: NaN or inf there
+    // would be cast to an integer bin (undefined behaviour) instead of refused.
+    for (double value : v)
+      if (!std::isfinite(value)) fail("not a finite number: '" + s + "'");
     if (section == "Atoms") {
       if (v.size() < 6)
         fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
@@ -123,6 +131,16 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
   if (static_cast<long>(atoms.size()) != natoms)
     throw InputError(path + ": header announces " + std::to_string(natoms) + " atoms, Atoms has " +
                      std::to_string(atoms.size()));
+  // Atoms far outside the box (LAMMPS keeps them within it, with image flags) are a damaged
+  // file, not a periodic image: refused with their line, not binned at a wrong place.
+  for (size_t r = 0; r < atoms.size(); ++r)
+    for (int d = 0; d < 3; ++d) {
+      const double xd = atoms.row(r)[3 + d] * length_scale;
+      if (out.len[d] > 0 && std::fabs(xd - out.lo[d] - 0.5 * out.len[d]) > 1e3 * out.len[d])
+        throw InputError(path + ":" + std::to_string(atoms.line[r]) + ": atom " +
+                         std::to_string(atoms.id[r]) + " lies " + "more than 1000 box lengths " +
+                         "outside the box along " + std::string(1, static_cast<char>('x' + d)));
+    }
   const std::vector<size_t> by_id = atoms.sorted(path, "atom id");
   const std::vector<size_t> vel_by_id = vels.sorted(path, "velocity of atom");
   HostParticles& h = out.particles;

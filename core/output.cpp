@@ -416,6 +416,22 @@ std::vector<T> read_all(hid_t file, const std::string& path, const std::string& 
   if (set < 0) throw InputError("HDF5 file " + path + " has no dataset " + name);
   hid_t space = H5Dget_space(set);
   const hssize_t n = H5Sget_simple_extent_npoints(space);
+  // An uncompressed (contiguous or compact) dataset that declares more data than the file
+  // holds is damaged, and allocating its size would only end in bad_alloc; a chunked one may
+  // be compressed, so it is allowed a thousand times the file's size.
+  hsize_t file_bytes = 0;
+  H5Fget_filesize(file, &file_bytes);
+  const hid_t plist = H5Dget_create_plist(set);
+  const bool chunked = plist >= 0 && H5Pget_layout(plist) == H5D_CHUNKED;
+  if (plist >= 0) H5Pclose(plist);
+  const double room = (chunked ? 1000.0 : 1.0) * static_cast<double>(file_bytes) + 4096.0;
+  if (n < 0 || static_cast<double>(n) * sizeof(T) > room) {
+    H5Sclose(space);
+    H5Dclose(set);
+    throw InputError("HDF5 file " + path + ": dataset " + name + " declares " + std::to_string(n) +
+                     " values, more than the file's " + std::to_string(file_bytes) +
+                     " bytes hold (a damaged file)");
+  }
   std::vector<T> out(static_cast<size_t>(n));
   herr_t st = H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
   H5Sclose(space);

@@ -63,6 +63,14 @@ void SceneFile::require(bool ok, const std::string& key, const std::string& what
   if (!ok) fail(key, what);
 }
 
+void SceneFile::require_distinct(const std::string& key, const std::vector<double>& values) const {
+  for (size_t a = 0; a < values.size(); ++a)
+    for (size_t b = a + 1; b < values.size(); ++b)
+      if (values[a] == values[b])
+        fail(key, "lists " + format_real(values[a]) + " twice (entries " + std::to_string(a + 1) +
+                      " and " + std::to_string(b + 1) + "); each entry names its own output");
+}
+
 namespace {
 // MemAvailable of /proc/meminfo in bytes (what can be allocated without swapping); +inf
 // where it cannot be read, so that the check never refuses a run for want of a reading.
@@ -211,6 +219,17 @@ std::vector<std::string> SceneFile::texts(const std::string& key) const {
 double SceneFile::real(const std::string& key, double def) const {
   if (find(key)) return real(key);
   note(key, format_real(def));
+  return def;
+}
+int SceneFile::small_integer(const std::string& key) const {
+  const long v = integer(key);
+  if (v > std::numeric_limits<int>::max() || v < std::numeric_limits<int>::min())
+    fail(key, "must lie within +-" + std::to_string(std::numeric_limits<int>::max()));
+  return static_cast<int>(v);
+}
+int SceneFile::small_integer(const std::string& key, int def) const {
+  if (find(key)) return small_integer(key);
+  note(key, std::to_string(def));
   return def;
 }
 long SceneFile::integer(const std::string& key, long def) const {

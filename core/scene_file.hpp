@@ -27,6 +27,9 @@ class SceneFile {
   // nan and -inf are still refused.
   double real_or_infinite(const std::string& key) const;
   long integer(const std::string& key) const;
+  // An integer that must fit an int (counts, indices): a larger value is refused naming the
+  // key instead of being truncated by a cast.
+  int small_integer(const std::string& key) const;
   std::string text(const std::string& key) const;
   bool flag(const std::string& key) const;
   std::vector<double> reals(const std::string& key) const;
@@ -36,6 +39,7 @@ class SceneFile {
   // Optional values with defaults (the default is recorded as the value used).
   double real(const std::string& key, double def) const;
   long integer(const std::string& key, long def) const;
+  int small_integer(const std::string& key, int def) const;
   std::string text(const std::string& key, const std::string& def) const;
   bool flag(const std::string& key, bool def) const;
   std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
@@ -63,6 +67,9 @@ class SceneFile {
 
   // A range check with the same style of message.
   void require(bool ok, const std::string& key, const std::string& what) const;
+  // A list whose entries name outputs (variants, models, targets) must not repeat one: the
+  // run would otherwise go to its end and fail writing the second dataset of that name.
+  void require_distinct(const std::string& key, const std::vector<double>& values) const;
   // Refuses, before anything is allocated, a size set by `key` whose run would need more
   // than the memory this machine has available (`bytes`: an estimate of that need).
   void require_memory(const std::string& key, double bytes) const;

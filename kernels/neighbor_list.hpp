@@ -297,12 +297,64 @@ class NeighborList {
     num_slabs_ = static_cast<int>(slab_begin_.extent(0)) - 1;
     const auto s = in.reals(g + "/scalars");
     if (s.size() != 6) throw InputError("restart group " + g + " has a malformed list");
-    num_entries_ = static_cast<int>(s[0]), builds_ = static_cast<long>(s[1]), a_max_ = s[2];
+    for (double v : s)
+      if (!std::isfinite(v) || v < 0 || v > 1e300)
+        throw InputError("restart group " + g + " has a malformed list (scalars)");
+    num_entries_ = static_cast<int>(std::min(s[0], 2e9)), builds_ = static_cast<long>(s[1]);
+    a_max_ = s[2];
     for (int d = 0; d < 3; ++d) built_len_[d] = s[3 + d];
+    check_loaded(g);
     index_pairs(static_cast<int>(owned_end_.extent(0)));  // follows from the rows
     keep_mirror(keep_mirror_);
     pair_index_valid_ = false;
     keep_pair_index(keep_pair_index_);
+  }
+
+  // Every index a loaded list holds points inside the arrays it indexes (a damaged
+  // checkpoint is refused here, naming the group, instead of read out of bounds later).
+  void check_loaded(const std::string& g) const {
+    auto bad = [&](const std::string& what) {
+      throw InputError("restart group " + g + ": " + what +
+                       " (a damaged checkpoint: resume from an intact copy, or run again)");
+    };
+    const auto off = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), offsets_);
+    const auto nb = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), neighbors_);
+    const auto own = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), owned_end_);
+    const auto cells = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), cell_particles_);
+    const auto slabs = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), slab_begin_);
+    const long n = static_cast<long>(own.extent(0));
+    if (static_cast<long>(off.extent(0)) != n + 1 || static_cast<long>(x_ref_.extent(0)) != n)
+      bad("offsets, owned_end and x_ref disagree on the number of particles");
+    if (off(0) != 0) bad("offsets do not start at 0");
+    for (long i = 0; i < n; ++i)
+      if (off(i + 1) < off(i) || own(i) < off(i) || own(i) > off(i + 1))
+        bad("row " + std::to_string(i) + " has offsets or owned_end out of order");
+    const long total = off(n);
+    if (total > static_cast<long>(nb.extent(0)) || num_entries_ != total)
+      bad("the rows hold more entries than the neighbour array");
+    for (long k = 0; k < total; ++k)
+      if (nb(k) < 0 || nb(k) >= n)
+        bad("neighbour entry " + std::to_string(k) + " names particle " + std::to_string(nb(k)) +
+            " of " + std::to_string(n));
+    if (mirror_valid_) {
+      const auto mir = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mirror_);
+      if (static_cast<long>(mir.extent(0)) < total) bad("the mirror array is short");
+      for (long k = 0; k < total; ++k)
+        if (mir(k) < 0 || mir(k) >= total)
+          bad("mirror entry " + std::to_string(k) + " out of range");
+    }
+    std::vector<char> seen(static_cast<size_t>(n), 0);
+    if (static_cast<long>(cells.extent(0)) != n) bad("cell_order does not list every particle");
+    for (long c = 0; c < n; ++c) {
+      if (cells(c) < 0 || cells(c) >= n || seen[cells(c)])
+        bad("cell_order entry " + std::to_string(c) + " is not a particle listed once");
+      seen[cells(c)] = 1;
+    }
+    if (slabs.extent(0) < 2 || slabs(0) != 0) bad("slab_begin does not start at 0");
+    for (size_t q = 1; q < slabs.extent(0); ++q)
+      if (slabs(q) < slabs(q - 1) || slabs(q) > n) bad("slab_begin out of order");
+    if (!(a_max_ > 0) || !(built_len_[0] > 0 && built_len_[1] > 0 && built_len_[2] > 0))
+      bad("the list's radius or box is not positive");
   }
 
   // Public only because nvcc rejects extended lambdas in private member functions.

@@ -147,20 +147,21 @@ int main(int argc, char** argv) {
                    "chain_master_equation, elastic_moduli, mixture_moduli)\n";
     }
   } catch (const granular::InputError& e) {
-    std::cerr << granular::ensemble::prefix() << "error: " << e.what() << "\n";
+    granular::ensemble::say(granular::ensemble::prefix() + "error: " + e.what());
     rc = 2;
   } catch (const granular::PhysicsError& e) {
-    std::cerr << granular::ensemble::prefix() << "stopped: " << e.what() << "\n";
+    granular::ensemble::say(granular::ensemble::prefix() + "stopped: " + e.what());
     rc = 3;
   } catch (const std::exception& e) {
-    std::cerr << granular::ensemble::prefix() << "error: " << e.what() << "\n";
+    granular::ensemble::say(granular::ensemble::prefix() + "error: " + e.what());
     rc = 1;
   }
   // One rank's failure ends the whole run (no rank waits forever for a message); its
   // outputs stay checkpoints and partial files, never files that look finished.
   if (rc != 0 && granular::ensemble::size() > 1) {
-    std::cerr << "rank " << granular::ensemble::rank() << " of " << granular::ensemble::size()
-              << " failed: stopping every rank\n";
+    granular::ensemble::say("rank " + std::to_string(granular::ensemble::rank()) + " of " +
+                            std::to_string(granular::ensemble::size()) +
+                            " failed: stopping every rank");
     granular::ensemble::abort_all(rc);
   }
   Kokkos::finalize();

@@ -234,22 +234,33 @@ TYPED_TEST(ImpactBenchmark, FrictionNeverPushesAlongTheSlipNorExceedsCoulomb) {
 }
 
 // The same check for the laws whose slip reset keeps the dashpot's share in the spring
-// (constant k_t, g_t: Luding's reset, as LAMMPS writes it).
-TYPED_TEST(ImpactBenchmark, LinearFrictionOpposesTheSlipWithTangentialDamping) {
-  const double kn = 1e3, gn = 5.0, kt = 800.0, gt = 4.0, mu = 0.3;
-  const ContactModel<LinearNormal, CoulombTangential> model{
-      LinearNormal::uniform(kn, gn), CoulombTangential::uniform(kt, gt, mu, mu), {}};
-  for (double angle_deg : {10.0, 30.0, 60.0, 80.0}) {
-    ImpactSetup s;
-    s.wall = false, s.radius1 = s.radius2 = 1.0, s.density1 = s.density2 = 1.0;
-    s.speed = 0.05, s.angle = angle_deg * M_PI / 180, s.dt = 1e-3, s.record = true;
-    const auto r = impact<TypeParam>(model, s);
-    ASSERT_TRUE(r.separated);
-    const FrictionCount n = count_friction(r, mu, s.speed);
-    const int along = n.along, over = n.over;
-    EXPECT_EQ(over, 0) << angle_deg;
-    EXPECT_EQ(along, 0) << angle_deg;
-  }
+// (g/k constant over the contact: Luding's reset, as LAMMPS writes it): the linear spring
+// with a constant dashpot, and Mindlin's sqrt(R delta) spring with a dashpot that scales
+// alike, on a damped Hertz contact.
+TYPED_TEST(ImpactBenchmark, ConstantRatioLawsOpposeTheSlipWithTangentialDamping) {
+  auto check = [](const auto& model, double mu, double speed, double dt, const char* law) {
+    for (double angle_deg : {10.0, 30.0, 60.0, 80.0}) {
+      ImpactSetup s;
+      s.wall = false, s.radius1 = s.radius2 = 1.0, s.density1 = s.density2 = 1.0;
+      s.speed = speed, s.angle = angle_deg * M_PI / 180, s.dt = dt, s.record = true;
+      const auto r = impact<TypeParam>(model, s);
+      ASSERT_TRUE(r.separated) << law;
+      const FrictionCount n = count_friction(r, mu, s.speed);
+      EXPECT_EQ(n.over, 0) << law << " " << angle_deg;
+      EXPECT_EQ(n.along, 0) << law << " " << angle_deg;
+      EXPECT_GT(n.sliding, 0) << law << " " << angle_deg;
+    }
+  };
+  const ContactModel<LinearNormal, CoulombTangential> linear{
+      LinearNormal::uniform(1e3, 5.0), CoulombTangential::uniform(800.0, 4.0, 0.3, 0.3), {}};
+  check(linear, 0.3, 0.05, 1e-3, "linear");
+  const double E = 1e4, nu = 0.3, G = E / (2 * (1 + nu));
+  const ContactModel<HertzNormal, CoulombTangential> mindlin{
+      {PairTable<HertzNormal::Params>::uniform(HertzNormal::modulus_form(E, nu, E, nu, 2.0))},
+      CoulombTangential::uniform(8 * G / (2 * (2 - nu)), 1.0, 0.4, 0.4,
+                                 CoulombTangential::MindlinReducedRadius),
+      {}};
+  check(mindlin, 0.4, 0.05, 2e-3, "mindlin sqrt(R delta)");
 }
 
 // A NaN in the state stops the impact with the quantity and the step named, instead of
@@ -266,6 +277,37 @@ TYPED_TEST(ImpactBenchmark, NaNInStateStopsTheImpactNamingQuantityAndStep) {
     const std::string what = e.what();
     EXPECT_NE(what.find("non-finite angular velocity of sphere 1"), std::string::npos) << what;
     EXPECT_NE(what.find("at step 1 "), std::string::npos) << what;
+  }
+}
+
+// A NaN planted in one particle of a packing stops the next health check naming the
+// particle: the measurements alone missed it (a NaN distance reads as "apart", so the
+// particle dropped out of every contact, maximum and sum).
+TYPED_TEST(ImpactBenchmark, NaNPlantedInAPackingStopsTheHealthCheckNamingTheParticle) {
+  using Exec = TypeParam;
+  HostParticles h;
+  h.resize(27);
+  for (int i = 0; i < 27; ++i) {
+    h.x[i] = 1.0 + 2.1 * (i % 3), h.y[i] = 1.0 + 2.1 * (i / 3 % 3), h.z[i] = 1.0 + 2.1 * (i / 9);
+    h.radius[i] = 1.0, h.density[i] = 1.0;
+  }
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = 6.3;
+  DemParams prm;
+  prm.dt = 1e-3, prm.skin = 0.3, prm.sort = false;
+  DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
+                                          frictionless_linear(100.0, 0.0), prm);
+  sys.step(5);
+  sys.check_health(sys.measure());  // a healthy state passes
+  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().v);
+  v(13, 1) = std::nan("");
+  Kokkos::deep_copy(sys.particles().v, v);
+  sys.step(1);
+  try {
+    sys.check_health(sys.measure());
+    FAIL() << "a NaN velocity passed the health check";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("of particle 13 "), std::string::npos) << e.what();
   }
 }
 

@@ -172,6 +172,14 @@ TEST(LammpsData, MalformedFilesAreInputErrorsNamingTheFile) {
   // A velocity for an atom that does not exist.
   expect_rejected("stray_velocity", file("2", atoms_ok + "\nVelocities\n\n7 0 0 0 0 0 0\n"),
                   "atom 7");
+  // An atom a thousand box lengths away (at 1e308 it used to reach the bin index as NaN cast
+  // to an integer: a segfault; at 1e20 the refusal blamed two periodic images).
+  expect_rejected("huge_x",
+                  file("2", "Atoms\n\n1 1 0.0002 2500 1e308 0 0\n2 1 0.0002 2500 0.001 0 0\n"),
+                  "more than 1000 box lengths outside the box along x");
+  expect_rejected("far_z",
+                  file("2", "Atoms\n\n1 1 0.0002 2500 0 0 1e20\n2 1 0.0002 2500 0.001 0 0\n"),
+                  ":12: atom 1 lies more than 1000 box lengths outside the box along z");
   // No atom count in the header.
   expect_rejected("no_count", "title\n\n1 atom types\n\nAtoms\n\n1 1 0.0002 2500 0 0 0\n", "atoms");
   // A missing file.

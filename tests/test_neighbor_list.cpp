@@ -10,6 +10,8 @@
 #include <set>
 #include <vector>
 
+#include "core/error.hpp"
+#include "core/output.hpp"
 #include "core/rng.hpp"
 #include "exec_spaces.hpp"
 #include "kernels/contact_model.hpp"
@@ -17,6 +19,7 @@
 #include "kernels/neighbor_list.hpp"
 #include "kernels/strain.hpp"
 #include "scenarios/common/packing.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
 
@@ -380,6 +383,61 @@ TYPED_TEST(NeighborListTest, VectorSweepInCellOrderListsTheScalarSweepsEntriesIn
 }
 
 #include "kernels/strain_modes.hpp"
+
+// A checkpoint's list with an index out of range is refused on load, naming its group,
+// instead of being read out of bounds on the first force pass (a segfault before).
+TYPED_TEST(NeighborListTest, DamagedListInACheckpointIsRefusedOnLoad) {
+  using Exec = TypeParam;
+  PeriodicBox box;
+  auto p = gas<Exec>(box, 300, 0.35);
+  NeighborList<Exec> nl(0.3);
+  nl.build(p, box);
+  // Per process: ctest runs the one- and two-thread variants at once.
+  const std::string dir = granular::testing::unique_temp_path("granular_list").string() + "_";
+  {
+    H5Writer w(dir + "granular_list_ok.h5");
+    nl.save(w, "list");
+    w.commit();
+  }
+  const H5Reader good(dir + "granular_list_ok.h5");
+  NeighborList<Exec> copy(0.3);
+  copy.load(good, "list");  // the intact list loads
+  // Rewrites the list with one integer dataset changed at `at` to `value`.
+  auto damaged = [&](const std::string& name, size_t at, int value) {
+    const std::string path = dir + "granular_list_bad.h5";
+    H5Writer w(path);
+    for (const char* d :
+         {"offsets", "neighbors", "mirror", "owned_end", "cell_order", "slab_begin"}) {
+      const std::string ds = std::string("list/") + d;
+      if (!good.has(ds)) continue;
+      std::vector<int> v = good.ints(ds);
+      if (name == d) v.at(at) = value;
+      w.write(ds, v);
+      w.attribute(ds, "extent0", good.attribute(ds, "extent0"));
+      w.attribute(ds, "extent1", good.attribute(ds, "extent1"));
+    }
+    w.write("list/x_ref", good.reals("list/x_ref"));
+    w.attribute("list/x_ref", "extent0", good.attribute("list/x_ref", "extent0"));
+    w.attribute("list/x_ref", "extent1", good.attribute("list/x_ref", "extent1"));
+    w.write("list/scalars", good.reals("list/scalars"));
+    w.commit();
+    return path;
+  };
+  const std::pair<const char*, int> cases[] = {
+      {"neighbors", p.n},   {"neighbors", -1}, {"cell_order", p.n + 5}, {"cell_order", -3},
+      {"offsets", 1 << 30}, {"owned_end", -7}, {"slab_begin", p.n + 1}};
+  for (const auto& [name, value] : cases) {
+    const std::string path = damaged(name, 1, value);
+    const H5Reader bad(path);
+    NeighborList<Exec> l(0.3);
+    try {
+      l.load(bad, "list");
+      ADD_FAILURE() << name << " = " << value << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("restart group list"), std::string::npos) << e.what();
+    }
+  }
+}
 
 TEST(StrainModes, PureShearConservesVolumeAndTrueStrainsAdd) {
   PeriodicBox box, ref;

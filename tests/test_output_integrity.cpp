@@ -15,6 +15,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/error.hpp"
 #include "core/output.hpp"
 
 using namespace granular;
@@ -181,4 +182,36 @@ TEST(OutputIntegrity, PlotHookPassesHostilePathsVerbatimAndRunsNoShell) {
   EXPECT_FALSE(fs::exists(marker)) << "a shell ran the path";
   EXPECT_EQ(read_text(hostile / "args.txt"), h5 + "\n" + hostile.string());
   fs::remove_all(dir);
+}
+
+// A dataset whose header declares far more values than the file holds (a garbled extent) is
+// refused naming the file and the dataset, before anything is allocated; reading it used to
+// allocate the declared size (3.8 GB, then bad_alloc, the file not named).
+TEST(OutputIntegrity, DatasetDeclaringMoreThanItsFileHoldsIsRefusedBeforeAllocating) {
+  const std::string path =
+      ::testing::TempDir() + "granular_garbled_extent_" + std::to_string(::getpid()) + ".h5";
+  {
+    // Contiguous storage allocated late: the extent is recorded, no data is written.
+    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    const hsize_t dims[1] = {hsize_t(1) << 32};  // 4 Gi doubles = 32 GiB
+    const hid_t space = H5Screate_simple(1, dims, nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_LATE);
+    const hid_t set =
+        H5Dcreate2(file, "huge", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    ASSERT_GE(set, 0);
+    H5Dclose(set), H5Pclose(dcpl), H5Sclose(space), H5Fclose(file);
+  }
+  ASSERT_LT(std::filesystem::file_size(path), 1u << 20);
+  const H5Reader r(path);
+  try {
+    (void)r.reals("huge");
+    FAIL() << "a dataset larger than its file was read";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("huge"), std::string::npos) << what;
+  }
+  std::remove(path.c_str());
 }

@@ -331,6 +331,37 @@ TEST(SavedConfigurations, StudyStoppedInsidePreparationStagesAndResumedTwiceEqua
   std::filesystem::remove_all(root);
 }
 
+// With an inertial-number rule the preparation's rate changes along the way; the save that
+// follows a checkpoint reports its inertial number with the rate the protocol had reached,
+// restored from the checkpoint (it used to restart from the nominal rate: 0.015 instead of
+// 0.005). Stopped after every single stage and resumed each time.
+TEST(SavedConfigurations, ResumedBeforeASaveReportsTheUninterruptedInertialNumber) {
+  const auto root = granular::testing::unique_temp_path("granular_rate_resume_test");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  const std::string text =
+      std::string(kPrepare) + "inertial_number = 1.0e-3\nmu = [0.5]\n" + kCommon;
+  opts.out_dir = (root / "straight").string();
+  run_elastic_moduli(scene(text, "study.toml"), opts);
+  opts.out_dir = (root / "stepped").string();
+  for (int run = 0; run < 200 && !std::filesystem::exists(root / "stepped" / "results.h5"); ++run) {
+    run_elastic_moduli(scene(text + "stop_after_stages = 1\n", "study.toml"), opts);
+    opts.resume = true;
+  }
+  const H5Reader a((root / "straight" / "results.h5").string());
+  const H5Reader b((root / "stepped" / "results.h5").string());
+  const auto I = a.reals("/table/inertial_number_preparation");
+  ASSERT_EQ(I.size(), 1u);
+  const auto rates = a.reals("/preparation/volumetric_strain_rate");
+  EXPECT_LT(*std::min_element(rates.begin(), rates.end()), 0.9 * 2.0e-2)
+      << "the rule lowers the rate: the check is not vacuous";
+  for (const char* name : {"/table/inertial_number_preparation", "/table/K_star",
+                           "/preparation/volumetric_strain_rate", "/preparation/phi"})
+    EXPECT_EQ(a.reals(name), b.reals(name)) << name;
+  std::filesystem::remove_all(root);
+}
+
 // On the loading branch the compression ends at the densest target. A checkpoint whose
 // stage number lies at or past the last stage (left by a protocol with more stages, such as
 // one that compressed on to phi_max) holds every saved configuration: the resumed run takes

@@ -78,8 +78,28 @@ TEST(SceneInputGuards, ElasticModuliRefusesNonFiniteAndAbsurdValues) {
       {"diameter_max", "inf", "particles.diameter_max"},
       {"phi_gas", "1e-320", "preparation.phi_gas"},
       {"count", "10000000000", "particles.count"},
+      // A negative skin listed no pair and gave null moduli with exit 0.
+      {"skin", "-0.2", "run.skin"},
   };
   for (const Mutant& m : mutants) expect_refused(text, m, check_moduli);
+  // Keys the file leaves at their defaults, added to its [probe] table: a bound below the
+  // probe's 20-step floor inverted std::clamp (K* inf, G* -inf); an orientation count beyond
+  // an int was truncated by a cast.
+  const size_t probe = text.find("[probe]\n");
+  ASSERT_NE(probe, std::string::npos);
+  const std::string with_keys = text.substr(0, probe + 8) +
+                                "max_strain_steps = 200000\norientations = 1\n" +
+                                text.substr(probe + 8);
+  expect_refused(with_keys, {"max_strain_steps", "-1", "probe.max_strain_steps"}, check_moduli);
+  expect_refused(with_keys, {"max_strain_steps", "19", "probe.max_strain_steps"}, check_moduli);
+  expect_refused(with_keys, {"orientations", "4294967299", "probe.orientations"}, check_moduli);
+}
+
+// Counts above an int are refused naming the key, not truncated by a cast (the run used to
+// go on with 100 steps per contact while summary.json recorded 4294967396).
+TEST(SceneInputGuards, CountsBeyondAnIntAreRefusedNotTruncated) {
+  const std::string text = shipped_scene("impact_glass_wall.toml");
+  expect_refused(text, {"steps_per_contact", "4294967396", "impact.steps_per_contact"}, run_impact);
 }
 
 TEST(SceneInputGuards, InfinityIsLegalOnlyWhereItMeansRigid) {
@@ -114,4 +134,14 @@ TEST(SceneInputGuards, MixtureModuliRefusesBadFractionsPressuresAndMissingKeys) 
   std::string missing = text;
   granular::testing::replace_once(missing, "tangential_stiffness = 150.0", "");
   expect_refused(missing, {"poisson", "0.5", "materials.rubber.tangential_stiffness"}, check);
+}
+
+// A list entry repeated in a list whose entries name outputs is refused before the run,
+// naming the key; it used to run to the end and fail with "cannot create dataset".
+TEST(SceneInputGuards, RepeatedListEntriesAreRefusedBeforeTheRun) {
+  expect_refused(shipped_scene("confined_compression_quick.toml"),
+                 {"stress_beta", "[1.0, 1.0]", "multicontact.stress_beta"},
+                 run_confined_compression);
+  expect_refused(shipped_scene("moduli_linear_quick.toml"),
+                 {"targets", "[0.68, 0.68]", "preparation.targets"}, check_moduli);
 }

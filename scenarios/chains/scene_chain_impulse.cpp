@@ -226,10 +226,10 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   const double v0 = scene.real("impulse.v0", 0.01);
   const std::string where = scene.text("impulse.bead", "first");
   const double t_max = scene.real("time.t_max");
-  const int decay_span = static_cast<int>(scene.integer("analysis.near_source_beads", 40));
+  const int decay_span = scene.small_integer("analysis.near_source_beads", 40);
   // The source describes the localized energy as a power law of the distance out to ~800
   // beads: fitted over [1, this], cut at 0.8 of the front's distance at the analysis time.
-  const int power_span = static_cast<int>(scene.integer("analysis.power_law_beads", 800));
+  const int power_span = scene.small_integer("analysis.power_law_beads", 800);
   scene.require(where == "first" || where == "centre", "impulse.bead", "must be first or centre");
   scene.require(v0 > 0 && v0 < 0.5, "impulse.v0",
                 "must be in (0, 0.5): small against the pre-compression");

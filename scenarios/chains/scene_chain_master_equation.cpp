@@ -133,7 +133,7 @@ EnsembleRun gather_band_runs(const EnsembleRun& mine, int B, long samples) {
 
 void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   ChainScene cs = read_chain_scene(scene);
-  const int B = static_cast<int>(scene.integer("bands.count"));
+  const int B = scene.small_integer("bands.count");
   // Where each band's tone sits: its middle bin (default), or its last bin, the source's
   // N = 4, 8, ..., 128 for L = 256 and B = 32 (N = 4r agitates band r - 1).
   const std::string placement = scene.text("bands.tone_placement", "centre");

@@ -116,12 +116,12 @@ std::vector<double> row(const std::vector<double>& m, int r, long T) {
 
 void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
   ChainScene cs = read_chain_scene(scene);
-  const int B = static_cast<int>(scene.integer("bands.count"));
+  const int B = scene.small_integer("bands.count");
   const long samples = scene.integer("time.samples");
   std::vector<double> tone_list = scene.reals("wave.tones", {});
   const std::vector<double> centre_bands = scene.reals("wave.bands", {});
   const std::vector<double> amplitudes = scene.reals("wave.u0", {0.01, 0.001});
-  const int mapped = static_cast<int>(scene.integer("maps.realization", 0));
+  const int mapped = scene.small_integer("maps.realization", 0);
   const double fit_tone = scene.real("fit.tone", -1);
   const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
   const auto w2 = scene.reals("fit.window_linear", {2, 8});

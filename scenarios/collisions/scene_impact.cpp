@@ -48,7 +48,7 @@ ImpactScene read_scene(const SceneFile& s) {
   c.angles = s.reals("impact.angles_deg", {0.0});
   c.oblique_speed = s.real("impact.oblique_speed", c.speeds.back());
   c.spin = s.real("impact.spin", 0.0);
-  c.steps_per_contact = static_cast<int>(s.integer("impact.steps_per_contact", 400));
+  c.steps_per_contact = s.small_integer("impact.steps_per_contact", 400);
   c.snapshot_every = s.integer("output.snapshot_every", 0);
   s.require(c.radius > 0, "impact.diameter", "must be positive");
   s.require(c.wall || c.target_radius > 0, "impact.target_diameter", "must be positive");

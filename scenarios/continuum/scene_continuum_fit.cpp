@@ -58,7 +58,7 @@ Setup read_setup(const SceneFile& scene) {
     s.history_data = scene.text("history.data");
     s.history_fit_mu = scene.real("history.fit_mu");
     s.history_nu_start = scene.real("history.nu_start");
-    s.history_substeps = static_cast<int>(scene.integer("history.substeps", 1));
+    s.history_substeps = scene.small_integer("history.substeps", 1);
     scene.require(s.history_nu_start > 0 && s.history_nu_start < 1, "history.nu_start",
                   "must lie in (0, 1)");
     scene.require(s.history_substeps >= 1, "history.substeps", "must be at least 1");
@@ -68,7 +68,7 @@ Setup read_setup(const SceneFile& scene) {
     s.shear_data = scene.text("shear.data");
     s.shear_fit_mu = scene.real("shear.fit_mu");
     DemShearSpec& d = s.dem;
-    d.gas.count = static_cast<int>(scene.integer("shear.count"));
+    d.gas.count = scene.small_integer("shear.count");
     d.gas.diameter_min = scene.real("shear.diameter_min");
     d.gas.diameter_max = scene.real("shear.diameter_max");
     d.gas.density = scene.real("shear.density");
@@ -88,7 +88,7 @@ Setup read_setup(const SceneFile& scene) {
     d.relax_max_steps = scene.integer("shear.relax_max_steps");
     d.strain = scene.real("shear.strain");
     d.strain_rate = scene.real("shear.strain_rate");
-    d.samples = static_cast<int>(scene.integer("shear.samples"));
+    d.samples = scene.small_integer("shear.samples");
     scene.require(d.gas.count >= 10, "shear.count", "must be at least 10");
     scene.require(d.phi > d.gas.phi && d.phi < 0.9, "shear.phi",
                   "must lie in (shear.phi_gas, 0.9)");

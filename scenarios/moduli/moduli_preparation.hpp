@@ -168,7 +168,19 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
                          ck.restart(k) + "); run without --resume");
       sys.emplace(restart_system<System>(read_config(ck.state(k)),
                                          k < relaxed_stage ? gas_model : model, s.params));
-      sys->load_restart(H5Reader(ck.restart(k)), "/restart");
+      const H5Reader restart(ck.restart(k));
+      sys->load_restart(restart, "/restart");
+      // The protocol's own state: the rate and direction the next stage starts from (a
+      // save right after the checkpoint reports its inertial number with them).
+      if (restart.has("/protocol/rate_and_direction")) {
+        const auto rd = restart.reals("/protocol/rate_and_direction");
+        if (rd.size() != 2 || !std::isfinite(rd[0]) || !(rd[0] > 0) ||
+            (rd[1] != 1.0 && rd[1] != -1.0))
+          throw InputError(ck.restart(k) +
+                           ": /protocol/rate_and_direction is damaged; run "
+                           "without --resume");
+        rate_now = rd[0], direction_now = rd[1];
+      }
       std::cerr << "variant " << label << ": continuing after stage " << k + 1 << " of "
                 << stages.size() << "\n";
     } else {
@@ -198,6 +210,7 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
     {
       H5Writer r(ck.restart(k));
       sys->save_restart(r, "/restart");
+      r.write("/protocol/rate_and_direction", std::vector<double>{rate_now, direction_now});
       r.commit();
     }
     save_moduli_part(ck.dir, ck.part(k), ck.fingerprint, out);

@@ -45,7 +45,8 @@ double stiffness_ratio(const ContactConfig& cc, double kn_mean, double kt_overri
 
 long steps_for(const Setup& s, double amplitude, double base_rate) {
   const double steps = amplitude / (base_rate * s.params.dt);
-  return std::clamp(static_cast<long>(std::ceil(steps)), 20L, s.max_strain_steps);
+  // max_strain_steps >= 20 is checked on read, but a variant's own dt rescales it.
+  return std::clamp(static_cast<long>(std::ceil(steps)), 20L, std::max(20L, s.max_strain_steps));
 }
 
 double rel_change(double a, double b) { return std::fabs(a / b - 1.0); }

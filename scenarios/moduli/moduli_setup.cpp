@@ -18,12 +18,15 @@ Setup read_setup(const SceneFile& scene) {
   s.params.skin = scene.real("run.skin");
   s.params.damping.translational = scene.real("damping.background", 0.0);
   s.params.damping.rotational = scene.real("damping.rotational", 0.0);
-  s.params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
+  s.params.rattler_threshold = scene.small_integer("run.rattler_threshold", 3);
   s.params.max_overlap = scene.real("run.max_overlap", 0.5);
   s.stop_after_variants = scene.integer("run.stop_after_variants", 0);
   s.stop_after_stages = scene.integer("run.stop_after_stages", 0);
   scene.require(s.stop_after_variants >= 0, "run.stop_after_variants", "must not be negative");
   scene.require(s.stop_after_stages >= 0, "run.stop_after_stages", "must not be negative");
+  // A negative skin lists no pair (every particle a rattler, no moduli): refused.
+  scene.require(s.params.skin > 0 && std::isfinite(s.params.skin), "run.skin",
+                "must be positive and finite");
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
   // Read only when present, so that studies checkpointed before the key existed resume.
@@ -42,9 +45,12 @@ Setup read_setup(const SceneFile& scene) {
   s.probe_relax = scene.integer("probe.relax_steps", 2000);
   s.probe_inertial = scene.real("probe.inertial_number", 0.0);
   s.max_strain_steps = scene.integer("probe.max_strain_steps", 200000);
+  // The probe's step count is clamped to [20, max_strain_steps]: a bound below 20 would
+  // invert the clamp (undefined behaviour, K* inf and G* -inf).
+  scene.require(s.max_strain_steps >= 20, "probe.max_strain_steps", "must be at least 20");
   s.keep_friction = scene.flag("probe.keep_friction", false);
   s.halving = scene.flag("probe.halving_check", false);
-  s.orientations = static_cast<int>(scene.integer("probe.orientations", 1));
+  s.orientations = scene.small_integer("probe.orientations", 1);
   scene.require(s.orientations == 1 || s.orientations == 3, "probe.orientations",
                 "must be 1 (shear in xy, uniaxial along x) or 3 (all planes and axes, averaged)");
   s.kt_ratios = scene.reals("probe.kt_over_kn", {});
@@ -100,6 +106,7 @@ Setup read_setup(const SceneFile& scene) {
                 "must be \"unloading\" (decompression from phi_max) or \"loading\"");
   s.loading_branch = branch == "loading";
   s.targets = scene.reals("preparation.targets");
+  scene.require_distinct("preparation.targets", s.targets);
   check_gas(scene, g, "preparation.phi_gas");
   scene.require(s.phi0 > g.phi && s.phi_max > s.phi0 && s.phi_max < 1, "preparation.phi_max",
                 "must satisfy phi_gas < phi_0 < phi_max < 1");
@@ -113,6 +120,7 @@ Setup read_setup(const SceneFile& scene) {
   std::vector<double> counts = scene.reals("ensemble.counts", {});
   std::vector<double> seeds = scene.reals("ensemble.seeds", {});
   const std::vector<double> mus = scene.reals("preparation.mu", {});
+  scene.require_distinct("preparation.mu", mus);
   if (counts.empty()) counts.push_back(g.count);
   if (seeds.empty()) seeds.push_back(static_cast<double>(g.seed));
   for (double c : counts) {

@@ -96,7 +96,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   params.skin = scene.real("run.skin");
   params.damping.translational = scene.real("damping.background", 0.0);
   params.damping.rotational = scene.real("damping.rotational", 0.0);
-  params.rattler_threshold = static_cast<int>(scene.integer("run.rattler_threshold", 3));
+  params.rattler_threshold = scene.small_integer("run.rattler_threshold", 3);
   params.max_overlap = scene.real("run.max_overlap", 0.3);
   const long sample_every = scene.integer("run.sample_every", 500);
   const long checkpoint_every = scene.integer("run.checkpoint_every", 100000);

@@ -41,13 +41,17 @@ inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const Materia
     return o.str();
   };
   if (s.flag("multicontact.classical", true)) out.push_back({"classical", base});
-  for (double g : s.reals("multicontact.strain_gamma", {1.0})) {
+  const std::vector<double> gammas = s.reals("multicontact.strain_gamma", {1.0});
+  const std::vector<double> betas = s.reals("multicontact.stress_beta", {1.0});
+  s.require_distinct("multicontact.strain_gamma", gammas);
+  s.require_distinct("multicontact.stress_beta", betas);
+  for (double g : gammas) {
     s.require(g > 0, "multicontact.strain_gamma", "must be positive");
     SoftModel sm{label("mc_strain_gamma_", g), base};
     sm.mc.mode = MultiContact::Strain, sm.mc.gamma = g;
     out.push_back(sm);
   }
-  for (double b : s.reals("multicontact.stress_beta", {1.0})) {
+  for (double b : betas) {
     s.require(b > 0, "multicontact.stress_beta", "must be positive");
     SoftModel sm{label("mc_stress_beta_", b), base};
     sm.mc.mode = MultiContact::Stress, sm.mc.beta = b;

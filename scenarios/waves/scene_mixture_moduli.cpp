@@ -130,7 +130,7 @@ Setup read_setup(const SceneFile& s) {
   sv.response_crossings = s.real("preparation.response_crossings", 2.0);
   sv.max_step = s.real("preparation.max_step", 0.002);
   sv.check_crossings = s.real("preparation.check_crossings", 0.25);
-  sv.max_cycles = static_cast<int>(s.integer("preparation.max_checks", 2000));
+  sv.max_cycles = s.small_integer("preparation.max_checks", 2000);
   sv.max_phase_steps = s.integer("preparation.max_phase_steps", 50000);
   s.require(sv.tolerance > 0 && sv.tolerance < 0.5, "preparation.tolerance",
             "must lie in (0, 0.5)");
@@ -159,7 +159,7 @@ Setup read_setup(const SceneFile& s) {
   u.params.dt_key = "run.dt";
   u.params.skin = s.real("run.skin");
   u.params.max_overlap = s.real("run.max_overlap", 0.3);
-  u.params.rattler_threshold = static_cast<int>(s.integer("run.rattler_threshold", 4));
+  u.params.rattler_threshold = s.small_integer("run.rattler_threshold", 4);
   s.require(u.params.dt > 0, "run.dt", "must be positive");
   s.require(u.params.skin > 0, "run.skin", "must be positive");
   s.require(u.params.max_overlap > 0 && u.params.max_overlap < 0.5, "run.max_overlap",

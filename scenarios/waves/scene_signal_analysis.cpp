@@ -49,9 +49,9 @@ Synthetic read_synthetic(const SceneFile& s) {
             "must be [t1, t2] with t2 > t1 >= 0");
   y.t1 = tt[0], y.t2 = tt[1];
   y.dt = s.real("synthetic.dt");
-  y.samples = static_cast<int>(s.integer("synthetic.samples"));
+  y.samples = s.small_integer("synthetic.samples");
   y.source_time = s.real("synthetic.source_time");
-  y.seeds = static_cast<int>(s.integer("synthetic.seeds", 10));
+  y.seeds = s.small_integer("synthetic.seeds", 10);
   y.noise = s.reals("synthetic.noise");
   y.fractions = s.reals("synthetic.band_fractions");
   s.require(y.q > 0, "synthetic.q", "must be positive");

@@ -22,7 +22,7 @@ SignalSettings read_signal_settings(const SceneFile& sc, const std::string& pre,
     sc.require(false, sp + "window", "must be \"lobe\", \"mirrored\", \"whole\" or \"span\"");
   }
   s.spectrum.taper = sc.real(sp + "taper", 0.0);
-  s.spectrum.pad_factor = static_cast<int>(sc.integer(sp + "pad_factor", 8));
+  s.spectrum.pad_factor = sc.small_integer(sp + "pad_factor", 8);
   sc.require(s.spectrum.taper >= 0 && s.spectrum.taper <= 1, sp + "taper", "must lie in [0, 1]");
   sc.require(s.spectrum.pad_factor >= 1 && s.spectrum.pad_factor <= 64, sp + "pad_factor",
              "must lie in [1, 64]");
