@@ -89,6 +89,10 @@ TEST_F(RunReport, SummaryRecordsWallTimeAndMachine) {
                           "kokkos_backends", "status"})
     EXPECT_NE(js.find(std::string("\"") + key + "\""), std::string::npos) << key;
   EXPECT_NE(js.find("\"status\": \"complete\""), std::string::npos);
+  // The source commit of the binary: 40 hex digits (with "-modified" when tracked files
+  // differed from it), or "unknown" outside a git clone.
+  const std::regex commit("\"granular_commit\": \"([0-9a-f]{40}(-modified)?|unknown)\"");
+  EXPECT_TRUE(std::regex_search(js, commit)) << js;
   EXPECT_EQ(js.substr(js.size() - 2), "}\n");
   // Adding the record again replaces it instead of adding a second one.
   record_run_in_summary(out(), run_record(1.0, "complete", ""));

@@ -17,6 +17,7 @@
 
 #include "core/ensemble.hpp"
 #include "core/error.hpp"
+#include "granular_commit.hpp"
 #include "granular_config.hpp"
 #include "kernels/force_slabs.hpp"
 
@@ -125,6 +126,8 @@ Json run_record(double wall_seconds, const std::string& status, const std::strin
                         std::to_string(v % 100);
   r["kokkos_backends"] = kokkos_backends();
   r["granular_version"] = GRANULAR_VERSION;
+  // The source commit the binary was built from ("-modified": tracked files differed).
+  r["granular_commit"] = GRANULAR_COMMIT;
   return r;
 }
 
