@@ -40,6 +40,15 @@ struct HertzNormal {
 
   // Tangent stiffness dF/d(delta) = 1.5 K sqrt(L delta), bounded above with the largest
   // allowed overlap and the largest pair length: the guard assumes the stiffest contact.
+  // The dashpot's largest rate G sqrt(L delta) / m, at the largest overlap and length.
+  double damping_rate(double m, double delta_ref, double length_max,
+                      const PairMask& pairs = PairMask::all()) const {
+    double g = 0;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (pairs(a, b)) g = std::max(g, table.p[a][b].G * std::sqrt(length_max * delta_ref));
+    return g / m;
+  }
   double stiffness(double delta_ref, double length_max,
                    const PairMask& pairs = PairMask::all()) const {
     double k = 0;

@@ -54,6 +54,19 @@ struct HertzRestitutionNormal {
   // Tangent stiffness dF/d(delta) = 1.5 K sqrt(R* delta), bounded above with the largest
   // allowed overlap and the largest pair length (R* < length_max): the guard assumes the
   // stiffest contact.
+  // The dashpot's rate alpha sqrt(m k_H)/m = alpha sqrt(k_H/m): below the period's scale for
+  // any alpha <= sqrt 5, listed for the guard's completeness.
+  double damping_rate(double m, double delta_ref, double length_max,
+                      const PairMask& pairs = PairMask::all()) const {
+    double r = 0;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        if (!pairs(a, b)) continue;
+        const double k = table.p[a][b].K * std::sqrt(length_max * delta_ref);
+        r = std::max(r, table.p[a][b].alpha * std::sqrt(k / m));
+      }
+    return r;
+  }
   double stiffness(double delta_ref, double length_max,
                    const PairMask& pairs = PairMask::all()) const {
     double k = 0;

@@ -46,6 +46,14 @@ struct HystereticNormal {
     return 0.5 * f * f / q.k2;
   }
 
+  double damping_rate(double m, double = 0, double = 0,
+                      const PairMask& pairs = PairMask::all()) const {
+    double g = 0;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (pairs(a, b)) g = std::max(g, table.p[a][b].gn);
+    return g / m;
+  }
   double stiffness(double = 0, double = 0, const PairMask& pairs = PairMask::all()) const {
     double k = 0;
     for (int a = 0; a < kMaxSpecies; ++a)

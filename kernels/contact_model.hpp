@@ -3,6 +3,8 @@
 // rotational degrees of freedom and no extra loads when a part is absent.
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <algorithm>
+#include <cmath>
 
 #include "kernels/contact_hertz.hpp"
 #include "kernels/contact_hertz_restitution.hpp"
@@ -95,9 +97,24 @@ struct ContactModel {
       k = std::max(k, tangential.stiffness(delta_ref, length_max, pairs));
     return k;
   }
+  // The shortest half period of the normal and, with friction, of the tangential spring on
+  // the tangential mass (2/7) m of solid spheres.
   double shortest_duration(double m, double delta_ref, double length_max,
                            const PairMask& pairs = PairMask::all()) const {
-    return normal.shortest_duration(m, delta_ref, length_max, pairs);
+    double t = normal.shortest_duration(m, delta_ref, length_max, pairs);
+    if constexpr (Tangential::active) {
+      const double kt = tangential.stiffness(delta_ref, length_max, pairs);
+      if (kt > 0) t = std::min(t, M_PI * std::sqrt(2.0 / 7.0 * m / kt));
+    }
+    return t;
+  }
+  // The fastest dashpot rate gamma / m of the contact (normal and tangential).
+  double damping_rate(double m, double delta_ref, double length_max,
+                      const PairMask& pairs = PairMask::all()) const {
+    double r = normal.damping_rate(m, delta_ref, length_max, pairs);
+    if constexpr (Tangential::active)
+      r = std::max(r, tangential.damping_rate(m, delta_ref, length_max, pairs));
+    return r;
   }
 };
 

@@ -77,6 +77,22 @@ struct CoulombTangential {
     const Params& q = table(s.si, s.sj);
     return 0.5 * q.kt * scale(q, s) * dot3(h, h);
   }
+  // The dashpot's largest rate gamma_t / m_t on the tangential mass m_t = (2/7) m of solid
+  // spheres (1/m + a^2/I = 7/(2m) per sphere).
+  double damping_rate(double m, double delta_ref, double length_max,
+                      const PairMask& pairs = PairMask::all()) const {
+    const double mt = 2.0 / 7.0 * m;
+    double r = 0;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        if (!pairs(a, b)) continue;
+        const Params& q = table.p[a][b];
+        const double c = q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref);
+        const double g = q.law == MindlinRestitution ? q.gt * std::sqrt(m * q.kt * c) : q.gt * c;
+        r = std::max(r, g / mt);
+      }
+    return r;
+  }
   double stiffness(double delta_ref, double length_max,
                    const PairMask& pairs = PairMask::all()) const {
     double k = 0;

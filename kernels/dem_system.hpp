@@ -627,11 +627,12 @@ class DemSystem {
         l[1] = mass(i);
     }
     const double delta_ref = params_.max_overlap * a_min_, length_max = 2 * a_max_;
-    double tc = none, k_worst = 0, m_worst = 0;
+    double tc = none, k_worst = 0, m_worst = 0, rate = 0;
     auto guard = [&](int a, int b, double m_red) {
       const PairMask pair = PairMask::only(a, b);
       const double t = model_.shortest_duration(m_red, delta_ref, length_max, pair);
       if (t < tc) tc = t, k_worst = model_.stiffness(delta_ref, length_max, pair), m_worst = m_red;
+      rate = std::max(rate, model_.damping_rate(m_red, delta_ref, length_max, pair));
     };
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = a; b < kMaxSpecies; ++b) {
@@ -655,6 +656,33 @@ class DemSystem {
         msg << params_.dt_hint;
       throw PhysicsError(msg.str());
     }
+    // Explicit dashpots: a rate gamma/m with gamma dt / m above 1 flips the relative velocity
+    // every step (above 2 it grows): contact dashpots on their pair's mass, the background
+    // and rotational damping on the lightest particle's mass and moment of inertia.
+    auto refuse = [&](const std::string& what, double value, const std::string& change) {
+      std::ostringstream msg;
+      msg.precision(4);
+      msg << what << " times dt = " << params_.dt << " is " << value
+          << ", above 1: the explicit step overshoots (the velocity changes sign each step); "
+          << change;
+      throw PhysicsError(msg.str());
+    };
+    if (rate * params_.dt > 1)
+      refuse("the fastest contact dashpot rate gamma/m = " + std::to_string(rate),
+             rate * params_.dt,
+             "lower the contact's damping (gamma_n, gamma_t) or " + params_.dt_key);
+    auto inertia = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.inertia);
+    double m_min = none, i_min = none;
+    for (int i = 0; i < p_.n; ++i)
+      m_min = std::min(m_min, mass(i)), i_min = std::min(i_min, inertia(i));
+    if (params_.damping.translational * params_.dt / m_min > 1)
+      refuse("the background damping over the lightest mass",
+             params_.damping.translational * params_.dt / m_min,
+             "lower the background damping (damping.background) or " + params_.dt_key);
+    if (model_.rotations && params_.damping.rotational * params_.dt / i_min > 1)
+      refuse("the rotational damping over the smallest moment of inertia",
+             params_.damping.rotational * params_.dt / i_min,
+             "lower the rotational damping (damping.rotational) or " + params_.dt_key);
   }
 
   Particles<ExecSpace> p_;

@@ -311,6 +311,46 @@ TYPED_TEST(ImpactBenchmark, NaNPlantedInAPackingStopsTheHealthCheckNamingThePart
   }
 }
 
+// The step must resolve every spring and dashpot the run depends on, not only the normal
+// spring: a stiff tangential spring, a strong contact dashpot, background or rotational
+// damping too strong for the lightest particle each stop the run before it starts, naming
+// what to change (they used to run and report K* = G* = 0 or null ratios).
+TYPED_TEST(ImpactBenchmark, StepTooLongForTangentialSpringOrAnyDashpotIsRefused) {
+  using Exec = TypeParam;
+  HostParticles h;
+  h.resize(27);
+  for (int i = 0; i < 27; ++i) {
+    h.x[i] = 1.0 + 2.1 * (i % 3), h.y[i] = 1.0 + 2.1 * (i / 3 % 3), h.z[i] = 1.0 + 2.1 * (i / 9);
+    h.radius[i] = 1.0, h.density[i] = 1.0;
+  }
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = 6.3;
+  using Model = ContactModel<LinearNormal, CoulombTangential>;
+  auto make = [&](double kt, double gt, double background, double rotational) {
+    DemParams prm;
+    prm.dt = 1e-3, prm.skin = 0.3, prm.dt_key = "run.dt";
+    prm.damping.translational = background, prm.damping.rotational = rotational;
+    const Model model{
+        LinearNormal::uniform(100.0, 0.1), CoulombTangential::uniform(kt, gt, 0.5, 0.5), {}};
+    DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
+  };
+  make(80.0, 0.1, 0.1, 0.01);  // a sound setting passes
+  auto refused = [&](double kt, double gt, double background, double rotational,
+                     const std::string& names) {
+    try {
+      make(kt, gt, background, rotational);
+      ADD_FAILURE() << names << ": accepted";
+    } catch (const PhysicsError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("run.dt"), std::string::npos) << e.what();
+    }
+  };
+  refused(1e12, 0.1, 0.1, 0.01, "set run.dt <=");  // the tangential spring's period
+  refused(80.0, 2e8, 0.1, 0.01, "gamma_t");
+  refused(80.0, 0.1, 1e9, 0.01, "damping.background");
+  refused(80.0, 0.1, 0.1, 1e9, "damping.rotational");
+}
+
 // ---- results -------------------------------------------------------------------------
 
 TEST(FiniteResults, MaxOverCasesKeepsNaN) {
