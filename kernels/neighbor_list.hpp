@@ -402,6 +402,14 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
   int nc[3];
   double cell_len[3];
   for (int d = 0; d < 3; ++d) {
+    // A collapsed or diverged box is not a size problem: "more particles" would be the wrong
+    // advice, and a non-finite edge would reach the cell count as NaN cast to an integer.
+    if (!(box.len[d] > 0) || !std::isfinite(box.len[d]))
+      throw PhysicsError("box edge " + std::to_string(box.len[d]) + " along " +
+                         std::string(1, static_cast<char>('x' + d)) +
+                         " is not a positive length: the box collapsed or diverged (a strain " +
+                         "rate too large for the run, or a non-finite state); lower the strain " +
+                         "rate or the time step");
     if (!box.periodic[d]) {  // no images: any length works, cells no smaller than rc
       nc[d] = std::max(1, static_cast<int>(std::floor(box.len[d] / rc)));
       cell_len[d] = box.len[d] / nc[d];

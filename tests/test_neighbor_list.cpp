@@ -439,6 +439,27 @@ TYPED_TEST(NeighborListTest, DamagedListInACheckpointIsRefusedOnLoad) {
   }
 }
 
+// A box compressed through zero (or made non-finite) is reported as collapsed, with the
+// advice to lower the rate, not "use more particles" (and no NaN reaches the cell count).
+TYPED_TEST(NeighborListTest, CollapsedBoxIsReportedAsCollapsed) {
+  using Exec = TypeParam;
+  PeriodicBox box;
+  auto p = gas<Exec>(box, 300, 0.35);
+  NeighborList<Exec> nl(0.3);
+  for (double edge : {-111.0, 0.0, std::nan("")}) {
+    PeriodicBox bad = box;
+    bad.len[1] = edge;
+    try {
+      nl.build(p, bad);
+      ADD_FAILURE() << "edge " << edge << " accepted";
+    } catch (const PhysicsError& e) {
+      EXPECT_NE(std::string(e.what()).find("along y is not a positive length"), std::string::npos)
+          << e.what();
+      EXPECT_EQ(std::string(e.what()).find("more particles"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(StrainModes, PureShearConservesVolumeAndTrueStrainsAdd) {
   PeriodicBox box, ref;
   for (int d = 0; d < 3; ++d) box.len[d] = ref.len[d] = 10.0;
