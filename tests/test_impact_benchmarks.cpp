@@ -45,6 +45,19 @@ HertzMindlin hertz_mindlin(double E, double nu, double e, double mu, bool wall) 
 
 double sphere_mass(double a, double rho) { return rho * 4.0 / 3.0 * M_PI * a * a * a; }
 
+// 27 unit spheres on a 3 x 3 x 3 lattice 0.1 apart, in a periodic box (a packing whose
+// health check has something to measure).
+HostParticles spaced_lattice(PeriodicBox& box) {
+  HostParticles h;
+  h.resize(27);
+  for (int i = 0; i < 27; ++i) {
+    h.x[i] = 1.0 + 2.1 * (i % 3), h.y[i] = 1.0 + 2.1 * (i / 3 % 3), h.z[i] = 1.0 + 2.1 * (i / 9);
+    h.radius[i] = 1.0, h.density[i] = 1.0;
+  }
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = 6.3;
+  return h;
+}
+
 // Steps of a recorded impact, in the contact's own frame: sliding steps (|f_t| at the
 // Coulomb limit); steps with |f_t| above the limit mu |f_n| (beyond round-off); and sliding
 // steps of the loading phase where friction pushes along the slip (f_t . v_c > 0). While the
@@ -285,14 +298,8 @@ TYPED_TEST(ImpactBenchmark, NaNInStateStopsTheImpactNamingQuantityAndStep) {
 // particle dropped out of every contact, maximum and sum).
 TYPED_TEST(ImpactBenchmark, NaNPlantedInAPackingStopsTheHealthCheckNamingTheParticle) {
   using Exec = TypeParam;
-  HostParticles h;
-  h.resize(27);
-  for (int i = 0; i < 27; ++i) {
-    h.x[i] = 1.0 + 2.1 * (i % 3), h.y[i] = 1.0 + 2.1 * (i / 3 % 3), h.z[i] = 1.0 + 2.1 * (i / 9);
-    h.radius[i] = 1.0, h.density[i] = 1.0;
-  }
   PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = 6.3;
+  const HostParticles h = spaced_lattice(box);
   DemParams prm;
   prm.dt = 1e-3, prm.skin = 0.3, prm.sort = false;
   DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(h), box,
@@ -317,14 +324,8 @@ TYPED_TEST(ImpactBenchmark, NaNPlantedInAPackingStopsTheHealthCheckNamingThePart
 // what to change (they used to run and report K* = G* = 0 or null ratios).
 TYPED_TEST(ImpactBenchmark, StepTooLongForTangentialSpringOrAnyDashpotIsRefused) {
   using Exec = TypeParam;
-  HostParticles h;
-  h.resize(27);
-  for (int i = 0; i < 27; ++i) {
-    h.x[i] = 1.0 + 2.1 * (i % 3), h.y[i] = 1.0 + 2.1 * (i / 3 % 3), h.z[i] = 1.0 + 2.1 * (i / 9);
-    h.radius[i] = 1.0, h.density[i] = 1.0;
-  }
   PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = 6.3;
+  const HostParticles h = spaced_lattice(box);
   using Model = ContactModel<LinearNormal, CoulombTangential>;
   auto make = [&](double kt, double gt, double background, double rotational) {
     DemParams prm;
