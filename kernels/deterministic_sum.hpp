@@ -13,9 +13,12 @@ namespace granular {
 // makes the results reproducible.
 constexpr int kDeterministicBlock = 256;
 
-// Sums columns of a (n x NC) View.
+// Adds the column sums of the first n rows of a (rows x NC) View to `out`, block by block
+// in index order. Calling it on consecutive chunks of a table (each a whole number of blocks
+// but the last) gives the same bits as one call on the whole table.
 template <int NC, class ExecSpace, class View2D>
-std::array<double, NC> deterministic_column_sums(const View2D& values, int n) {
+void accumulate_deterministic_column_sums(const View2D& values, int n,
+                                          std::array<double, NC>& out) {
   constexpr int block = kDeterministicBlock;
   const int nblocks = (n + block - 1) / block;
   using mem = typename ExecSpace::memory_space;
@@ -32,9 +35,15 @@ std::array<double, NC> deterministic_column_sums(const View2D& values, int n) {
         }
       });
   auto host = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), partial);
-  std::array<double, NC> out{};
   for (int b = 0; b < nblocks; ++b)
     for (int c = 0; c < NC; ++c) out[c] += host(b, c);
+}
+
+// Sums columns of a (n x NC) View.
+template <int NC, class ExecSpace, class View2D>
+std::array<double, NC> deterministic_column_sums(const View2D& values, int n) {
+  std::array<double, NC> out{};
+  accumulate_deterministic_column_sums<NC, ExecSpace>(values, n, out);
   return out;
 }
 

@@ -9,6 +9,7 @@
 //                        [--alternate batch|near|stream|skin|rows|pack [--block B]]
 //                        [--skin-b S] [--zero-rows] [--no-pack] [--pack-min N]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
+//                        [--tile NX,NY,NZ] [--no-memory]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --near-skin S: the force pass's near list (DemParams::near_skin: < 0, the default, a 32nd of
@@ -30,6 +31,12 @@
 // one per contact (DemParams::contact_thread_per_particle; the same bits).
 // --slabs / --block-rows: the host force pass's partition and the cell order
 // (DemParams::force_slabs, cell_block_rows; they change the order of the force sums).
+// --tile NX,NY,NZ: the --data packing replicated NX x NY x NZ times (periodic images, same
+// contacts per particle at every size); how a 100-million-sphere packing is made from the
+// peer's 32768 without a file of gigabytes.
+// Every row records the peak of the device allocations during its first repetition, array
+// by array (perf/allocation_tracker.hpp), and a minimal-traffic model of the step beside the
+// engine's own byte count (docs/gpu_memory.md); --no-memory leaves the tracking out.
 // --no-triad skips the bandwidth measurements, triad and copy (their 768 MiB of arrays would
 // also dominate the peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
@@ -47,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "allocation_tracker.hpp"
 #include "core/error.hpp"
 #include "core/lammps_data.hpp"
 #include "core/output.hpp"
@@ -102,6 +110,32 @@ std::vector<int> parse_sizes(const std::string& s) {
   return out;
 }
 
+// The packing repeated t[0] x t[1] x t[2] times along the box edges (periodic images).
+HostParticles tiled(const HostParticles& one, PeriodicBox& box, const std::vector<int>& t) {
+  const long copies = static_cast<long>(t[0]) * t[1] * t[2];
+  const long n1 = one.size();
+  if (n1 * copies > 2000000000L)
+    throw InputError("--tile: " + std::to_string(n1 * copies) +
+                     " particles exceed the engine's 32-bit particle index");
+  HostParticles out;
+  out.resize(static_cast<int>(n1 * copies));
+  long k = 0;
+  for (int a = 0; a < t[0]; ++a)
+    for (int b = 0; b < t[1]; ++b)
+      for (int c = 0; c < t[2]; ++c)
+        for (long i = 0; i < n1; ++i, ++k) {
+          out.x[k] = one.x[i] + a * box.len[0];
+          out.y[k] = one.y[i] + b * box.len[1];
+          out.z[k] = one.z[i] + c * box.len[2];
+          out.vx[k] = one.vx[i], out.vy[k] = one.vy[i], out.vz[k] = one.vz[i];
+          out.wx[k] = one.wx[i], out.wy[k] = one.wy[i], out.wz[k] = one.wz[i];
+          out.radius[k] = one.radius[i], out.density[k] = one.density[i];
+          out.species[k] = one.species[i];
+        }
+  for (int d = 0; d < 3; ++d) box.len[d] *= t[d];
+  return out;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t m = v.size() / 2;
@@ -122,6 +156,8 @@ int main(int argc, char** argv) {
     int slabs = DemParams{}.force_slabs, block_rows = DemParams{}.cell_block_rows;
     int pack_min = DemParams{}.packed_stream_min_particles;
     long steps = 2000, warmup = 500;
+    std::vector<int> tile{1, 1, 1};
+    bool track_memory = true;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto next = [&]() -> std::string {
@@ -166,12 +202,24 @@ int main(int argc, char** argv) {
         per_particle = true;
       else if (a == "--slabs")
         slabs = std::stoi(next());
+      else if (a == "--tile")
+        tile = parse_sizes(next());
+      else if (a == "--no-memory")
+        track_memory = false;
       else if (a == "--block-rows")
         block_rows = std::stoi(next());
       else if (a.rfind("--kokkos", 0) != 0) {
         std::cerr << "unknown option " << a << "\n";
         return 2;
       }
+    }
+    if (tile.size() != 3 || *std::min_element(tile.begin(), tile.end()) < 1) {
+      std::cerr << "--tile takes three positive counts, NX,NY,NZ\n";
+      return 2;
+    }
+    if (data.empty() && tile != std::vector<int>{1, 1, 1}) {
+      std::cerr << "--tile replicates the --data packing; give --data\n";
+      return 2;
     }
     if (!alternate.empty() && alternate != "batch" && alternate != "near" &&
         alternate != "stream" && alternate != "skin" && alternate != "rows" &&
@@ -230,6 +278,11 @@ int main(int argc, char** argv) {
             host = std::move(d.particles);
             for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
             source = data;
+            if (tile != std::vector<int>{1, 1, 1}) {
+              host = tiled(host, box, tile);
+              source += " tiled " + std::to_string(tile[0]) + "x" + std::to_string(tile[1]) + "x" +
+                        std::to_string(tile[2]);
+            }
           } else {
             host = dense_packing(n_req, box, cache_dir);
             source = "generated (seed 12345)";
@@ -237,6 +290,8 @@ int main(int argc, char** argv) {
           const int n = host.size();
           std::vector<double> rates, alternated;
           StepProfile prof;
+          double peak_memory = 0;
+          std::vector<perf::AllocationTracker::Entry> memory_at_peak;
           double z_initial = 0, ekin_initial = 0, z_start = 0, z_end = 0, phi = 0, ekin_start = 0,
                  ekin_end = 0, erot_start = 0, erot_end = 0;
           long builds = 0, near_recordings = 0, near_reads = 0, packed_reads = 0;
@@ -251,6 +306,7 @@ int main(int argc, char** argv) {
             prm.packed_stream = packed;
             prm.packed_stream_min_particles = pack_min;
             prm.force_slabs = slabs, prm.cell_block_rows = block_rows;
+            if (r == 0 && track_memory) perf::AllocationTracker::start();
             Particles<Exec> particles = Particles<Exec>::from_host(host);
             // The last system no longer needs the file's copy: peak memory is the engine's.
             if (r == reps - 1) host = HostParticles();
@@ -322,6 +378,11 @@ int main(int argc, char** argv) {
               sys.step(std::min(steps, 500L));
               sys.set_profile(nullptr);
             }
+            if (r == 0 && track_memory) {
+              perf::AllocationTracker::stop();
+              peak_memory = perf::AllocationTracker::peak_bytes();
+              memory_at_peak = perf::AllocationTracker::breakdown_at_peak();
+            }
             std::cerr << phys << " N " << n << " rep " << r << ": " << rates.back() / 1e6
                       << " M particle-steps/s\n";
           }
@@ -372,6 +433,19 @@ int main(int argc, char** argv) {
           const double integrate_bytes =
               (24 + 24 + 24 + 24 * R + 24 * R + 8 + 8 * R + 24) + (24 + 24 + 24 * R) + pack_bytes;
           const double bytes = force_bytes + integrate_bytes;
+          // The least a step must move (docs/gpu_memory.md): each particle's state read once
+          // and written once (mass and inertia follow from the radius), force and torque
+          // written and read once, each contact's history read and written once, the owned
+          // list entries' indices read once; partners' data from cache.
+          const std::vector<std::pair<const char*, double>> terms{
+              {"state_read", 24 + 24 + 8 + 24 * R},
+              {"state_written", 24 + 24 + 24 * R},
+              {"force_and_torque_written_and_read", 2 * (24 + 24 * R)},
+              {"contact_history_read_and_written", contacts * 2 * 8 * H},
+              {"owned_neighbour_indices", owned * 4}};
+          Json traffic = Json::object();
+          double min_bytes = 0;
+          for (const auto& [term, b] : terms) traffic[term] = b, min_bytes += b;
           const double med = median(rates);
           const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
           Json row = Json::object();
@@ -412,6 +486,23 @@ int main(int argc, char** argv) {
           row["achieved_bandwidth_GBs"] = med * bytes / 1e9;
           if (triad) row["fraction_of_triad_bandwidth"] = med * bytes / bandwidth;
           if (triad) row["fraction_of_copy_bandwidth"] = med * bytes / copy_bw;
+          row["min_traffic_bytes_per_particle_step"] = min_bytes;
+          row["min_traffic_terms"] = traffic;
+          if (triad) row["min_traffic_fraction_of_copy_bandwidth"] = med * min_bytes / copy_bw;
+          if (track_memory) {
+            // Device memory at the peak of the first repetition, array by array.
+            row["peak_device_bytes"] = peak_memory;
+            row["peak_device_bytes_per_particle"] = peak_memory / n;
+            Json arrays = Json::array();
+            for (const auto& e : memory_at_peak) {
+              Json a = Json::object();
+              a["space"] = e.space;
+              a["label"] = e.label;
+              a["bytes_per_particle"] = e.bytes / n;
+              arrays.push(a);
+            }
+            row["peak_device_arrays"] = arrays;
+          }
           // Peak resident memory of the process so far (all rows up to this one).
           row["resident_kB"] = perf::peak_resident_kB();
           Json split = Json::object();
@@ -422,7 +513,9 @@ int main(int argc, char** argv) {
           row["profile_fraction"] = split;
           rows.push(row);
           std::cout << phys << " N " << n << " threads " << threads << ": median " << med / 1e6
-                    << " M particle-steps/s, z " << z_end << ", " << bytes << " B/particle-step";
+                    << " M particle-steps/s, z " << z_end << ", " << bytes
+                    << " B/particle-step (minimal " << min_bytes << ")";
+          if (track_memory) std::cout << ", peak memory " << peak_memory / n << " B/particle";
           if (triad)
             std::cout << ", " << 100 * med * bytes / bandwidth << " % of triad " << bandwidth / 1e9
                       << " GB/s, " << 100 * med * bytes / copy_bw << " % of copy " << copy_bw / 1e9
