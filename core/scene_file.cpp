@@ -2,6 +2,7 @@
 #include "core/scene_file.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -241,6 +242,33 @@ std::string SceneFile::text(const std::string& key, const std::string& def) cons
   if (find(key)) return text(key);
   note(key, "\"" + def + "\"");
   return def;
+}
+std::string SceneFile::input_path(const std::string& key, bool folder) const {
+  namespace fs = std::filesystem;
+  const std::string given = text(key);
+  require(!given.empty(), key, "is empty (a path is required)");
+  fs::path p(given);
+  if (p.is_relative()) p = fs::path(path_).parent_path() / p;
+  const std::string resolved = p.lexically_normal().string();
+  std::error_code ec;
+  const bool is_folder = fs::is_directory(p, ec), is_file = fs::is_regular_file(p, ec);
+  const std::string shown =
+      "'" + given + "'" +
+      (resolved != given
+           ? " (" + resolved + ", relative paths are taken from the scene file's folder)"
+           : "");
+  if (folder && !is_folder)
+    fail(key, "names " + shown +
+                  (is_file ? ", a file where a folder is needed" : ", which does not exist"));
+  if (!folder && !is_file)
+    fail(key, "names " + shown +
+                  (is_folder ? ", a folder where a file is needed" : ", which does not exist"));
+  return resolved;
+}
+std::string SceneFile::optional_input_path(const std::string& key, bool folder) const {
+  if (find(key)) return input_path(key, folder);
+  note(key, "\"\"");
+  return std::string();
 }
 bool SceneFile::flag(const std::string& key, bool def) const {
   if (find(key)) return flag(key);

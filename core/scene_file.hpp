@@ -44,6 +44,12 @@ class SceneFile {
   bool flag(const std::string& key, bool def) const;
   std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
   bool has(const std::string& key) const;
+  // A path to an input the scene reads (a file, or a folder where `folder` is true). A relative
+  // path is resolved from the folder of the scene file, so a scene copied together with its
+  // inputs works from any working directory; the path must exist, which `granular check`
+  // therefore checks too. The optional form returns "" when the key is absent.
+  std::string input_path(const std::string& key, bool folder = false) const;
+  std::string optional_input_path(const std::string& key, bool folder = false) const;
   // A named choice: `parse` turns the text of `key` (default `def`) into a value and throws
   // InputError for an unknown name; the error is re-thrown naming the key and the file.
   template <class Parse>

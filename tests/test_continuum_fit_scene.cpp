@@ -2,6 +2,7 @@
 // unknown key stops the run before any work, naming the key and the file.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -43,16 +44,18 @@ TEST(ContinuumFitScene, ShippedSceneFilesReadWithoutError) {
 TEST(ContinuumFitScene, UnknownOrMissingKeyIsNamedWithTheFile) {
   const std::string path = granular::testing::shipped_scene_path("continuum_fit_quick.toml");
   const std::string text = read(path);
+  // Named as if beside the shipped file, so its relative study paths resolve.
+  const std::string dir = std::filesystem::path(path).parent_path().string() + "/";
   std::string typo = text;
   typo.insert(typo.find("[fit]\n") + 6, "z_minimum = 4.0\n");
-  const std::string unknown = error_of(typo, "typo.toml");
+  const std::string unknown = error_of(typo, dir + "typo.toml");
   EXPECT_NE(unknown.find("z_minimum"), std::string::npos) << unknown;
   EXPECT_NE(unknown.find("typo.toml"), std::string::npos) << unknown;
   std::string without = text;
   const size_t at = without.find("step = 4.0e-5");
   ASSERT_NE(at, std::string::npos);
   without.erase(at, without.find('\n', at) - at);
-  const std::string missing = error_of(without, "missing.toml");
+  const std::string missing = error_of(without, dir + "missing.toml");
   EXPECT_NE(missing.find("law.step"), std::string::npos) << missing;
   EXPECT_NE(missing.find("missing.toml"), std::string::npos) << missing;
 }

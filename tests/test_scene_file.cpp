@@ -1,7 +1,11 @@
 // Scene files: wrong, missing and unknown keys are errors that name the key and the file.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "core/scene_file.hpp"
+#include "test_support.hpp"
 
 using granular::InputError;
 using granular::SceneFile;
@@ -49,4 +53,37 @@ TEST(SceneFile, DefaultsAreRecordedAndKnownKeysPass) {
 TEST(SceneFile, SyntaxErrorReportsFileAndLine) {
   const std::string msg = error_of([] { SceneFile::parse("a = \n", "broken.toml"); });
   EXPECT_NE(msg.find("broken.toml"), std::string::npos) << msg;
+}
+
+// A copied scene keeps its inputs: relative paths are taken from the scene file's folder, not
+// from the working directory, and a missing input is refused before the run, naming key, path
+// and file.
+TEST(SceneFile, RelativeInputPathsResolveFromTheSceneFilesFolder) {
+  namespace fs = std::filesystem;
+  const fs::path dir = granular::testing::temp_dir("scene_paths");
+  fs::create_directories(dir / "inputs" / "study");
+  std::ofstream(dir / "inputs" / "trace.csv") << "0,1\n";
+  std::ofstream(dir / "scene.toml") << "trace = \"inputs/trace.csv\"\nstudy = \"inputs/study\"\n"
+                                    << "absent = \"inputs/none.csv\"\nwrong = \"inputs/study\"\n";
+  const fs::path cwd = fs::current_path();
+  fs::current_path(fs::temp_directory_path());  // anywhere but the scene's folder
+  const SceneFile s = SceneFile::load((dir / "scene.toml").string());
+  EXPECT_EQ(s.input_path("trace"), (dir / "inputs" / "trace.csv").string());
+  EXPECT_EQ(s.input_path("study", true), (dir / "inputs" / "study").string());
+  EXPECT_EQ(s.optional_input_path("not_given"), "");
+  std::string msg = error_of([&] { s.input_path("absent"); });
+  EXPECT_NE(msg.find("'absent'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("inputs/none.csv"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("does not exist"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("scene.toml"), std::string::npos) << msg;
+  msg = error_of([&] { s.input_path("wrong"); });
+  EXPECT_NE(msg.find("a folder where a file is needed"), std::string::npos) << msg;
+  msg = error_of([&] { s.input_path("trace", true); });
+  EXPECT_NE(msg.find("a file where a folder is needed"), std::string::npos) << msg;
+  // Absolute paths are taken as they are.
+  const auto abs = SceneFile::parse("trace = \"" + (dir / "inputs" / "trace.csv").string() + "\"\n",
+                                    "elsewhere.toml");
+  EXPECT_EQ(abs.input_path("trace"), (dir / "inputs" / "trace.csv").string());
+  fs::current_path(cwd);
+  fs::remove_all(dir);
 }

@@ -38,10 +38,8 @@ double json_number(const std::string& json, const std::string& key, const std::s
 TEST(SignalAnalysisScene, ShippedExampleTracesGiveTheirQAndDelay) {
   std::string text = shipped_scene("signal_analysis_traces.toml");
   const std::string src = std::string(GRANULAR_SOURCE_DIR) + "/scenarios/waves/";
-  replace_once(text, "\"scenarios/waves/signal_example_trace1.csv\"",
-               "\"" + src + "signal_example_trace1.csv\"");
-  replace_once(text, "\"scenarios/waves/signal_example_trace2.csv\"",
-               "\"" + src + "signal_example_trace2.csv\"");
+  replace_once(text, "\"signal_example_trace1.csv\"", "\"" + src + "signal_example_trace1.csv\"");
+  replace_once(text, "\"signal_example_trace2.csv\"", "\"" + src + "signal_example_trace2.csv\"");
   RunOptions opts;
   opts.out_dir = temp_dir("signal_traces");
   opts.progress = false, opts.charts = false;

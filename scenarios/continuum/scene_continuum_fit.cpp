@@ -48,12 +48,12 @@ Setup read_setup(const SceneFile& scene) {
   scene.require(s.step > 0 && s.step < 0.01, "law.step", "must lie in (0, 0.01)");
   s.z_min = scene.real("fit.z_min", 4.0);
   for (const std::string& name : scene.tables("data"))
-    s.data.push_back({name, scene.text("data." + name + ".study")});
+    s.data.push_back({name, scene.input_path("data." + name + ".study", true)});
   scene.require(!s.data.empty(), "data", "needs at least one [data.<name>] table with a study");
   s.example_step = scene.real("example.step", -1e-4);
   s.example_nu_end = scene.real("example.nu_end", 0.82);
   scene.require(s.example_step < 0, "example.step", "must be negative (compression)");
-  s.history_file = scene.text("history.file", "");
+  s.history_file = scene.optional_input_path("history.file");
   if (!s.history_file.empty()) {
     s.history_data = scene.text("history.data");
     s.history_fit_mu = scene.real("history.fit_mu");

@@ -78,7 +78,7 @@ void write_state(H5Writer& h5, const LammpsForceField& ff, double nktv2p) {
 }  // namespace
 
 void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
-  const std::string data_path = scene.text("lammps.data");
+  const std::string data_path = scene.input_path("lammps.data");
   const LammpsUnits units =
       scene.choice("lammps.units", "si", [](const std::string& s) { return lammps_units(s); });
   const std::string style = scene.text("lammps.pair_style");

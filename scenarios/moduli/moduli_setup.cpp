@@ -11,7 +11,7 @@ namespace granular::moduli_study {
 
 Setup read_setup(const SceneFile& scene) {
   Setup s;
-  s.start_from = scene.text("start.from", "");
+  s.start_from = scene.optional_input_path("start.from");
   s.contact = ContactConfig::read(scene);
   s.params.dt = scene.real("run.dt");
   s.params.dt_key = "run.dt";

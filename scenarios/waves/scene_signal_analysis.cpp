@@ -17,7 +17,7 @@ namespace granular {
 namespace {
 
 Trace read_input_trace(const SceneFile& s, const std::string& k) {
-  const std::string file = s.text(k + ".file");
+  const std::string file = s.input_path(k + ".file");
   const std::string format = s.text(k + ".format", "csv");
   s.require(format == "csv" || format == "hdf5", k + ".format", "must be \"csv\" or \"hdf5\"");
   try {
