@@ -145,3 +145,18 @@ TEST(SceneInputGuards, RepeatedListEntriesAreRefusedBeforeTheRun) {
   expect_refused(shipped_scene("moduli_linear_quick.toml"),
                  {"targets", "[0.68, 0.68]", "preparation.targets"}, check_moduli);
 }
+
+// A chain's recording length sets the size of its energy profiles (samples x beads per block of
+// realizations): refused naming time.t_max before anything is allocated, where it used to end in
+// std::bad_alloc or take 8 GB first. Checked in check mode, so a missing guard cannot start the
+// run.
+TEST(SceneInputGuards, ChainRecordingBeyondMemoryIsRefusedNamingTMax) {
+  const std::string text = shipped_scene("chain_impulse_quick.toml");
+  auto check = [](const SceneFile& s, const RunOptions& o) {
+    RunOptions c = o;
+    c.check_only = true;
+    run_chain_impulse(s, c);
+  };
+  expect_refused(text, {"t_max", "1e15", "time.t_max"}, check);  // beyond 1e9 samples
+  expect_refused(text, {"t_max", "5e8", "time.t_max"}, check);   // profiles beyond memory
+}

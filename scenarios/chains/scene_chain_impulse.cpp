@@ -240,7 +240,13 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   scene.reject_unknown_keys();
   const int N = cs.spec.beads;
   const int source = where == "first" ? 0 : N / 2;
+  scene.require(t_max / cs.sample_every <= 1e9, "time.t_max",
+                "asks for more than 1e9 samples of time.sample_every");
   const long samples = std::lround(t_max / cs.sample_every);
+  // Every block of realizations keeps an energy profile per sample and bead, and the
+  // ensemble series another: refused here, naming the key, rather than failing to allocate.
+  const double blocks = std::ceil(double(cs.realizations) / kRealizationBlock);
+  scene.require_memory("time.t_max", 8.0 * (blocks + 2) * (samples + 1.0) * (N + 6.0));
 
   if (!begin_outputs(opts)) return;
   // This rank's blocks of realizations at disorder xi k; rank 0 gets the ensemble series of

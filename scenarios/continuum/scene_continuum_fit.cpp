@@ -204,6 +204,14 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       const std::string key = key_of(d, set.name);
       std::cerr << "fitting " << d.name << " (" << set.study << ")\n";
       const ContinuumFit f = fit_continuum_law(d, s.z_min);
+      // The validation path keeps 15 doubles per law step (twice that while growing):
+      // refused naming the key rather than allocating gigabytes for a tiny step.
+      if (!d.prep_phi.empty() && f.law.nu0 > 0) {
+        const double lo = *std::min_element(d.prep_phi.begin(), d.prep_phi.end()),
+                     hi = *std::max_element(d.prep_phi.begin(), d.prep_phi.end());
+        const double span = std::abs(std::log(hi / f.law.nu0)) + std::abs(std::log(hi / lo));
+        scene.require_memory("law.step", (span / (3 * s.step) + 2) * 15 * 8 * 2);
+      }
       const IsotropicValidation v = validate_isotropic(d, f.law, s.update, s.step);
       fits[key] = f, data_of[key] = d;
       Json j = Json::object();

@@ -11,6 +11,9 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "core/output.hpp"
 #include "core/progress.hpp"
@@ -132,6 +135,7 @@ std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
     Progress progress("servo to " + std::to_string(target) + " MPa", max_steps, opts.progress);
     long steps = 0;
     double sigma = wall_stress(sys.wall_loads(), area);
+    std::vector<std::pair<double, double>> held;  // (gap, sigma_xx) of each held state
     auto advance = [&](double time) {
       const long n = std::max<long>(1, static_cast<long>(std::ceil(time / w.dt)));
       sys.step(n);
@@ -140,10 +144,18 @@ std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
       sys.check_health(sys.measure());
       sigma = wall_stress(sys.wall_loads(), area);
       progress.update(steps);
-      if (steps > max_steps)
+      if (steps > max_steps) {
+        // The last held states say whether the servo oscillated, crept or never loaded.
+        std::ostringstream last;
+        last.precision(6);
+        for (size_t k = held.size() > 8 ? held.size() - 8 : 0; k < held.size(); ++k)
+          last << (k ? ", " : "") << "gap " << held[k].first << " mm: " << held[k].second;
         throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target) +
                            " MPa within preparation.max_time (now " + std::to_string(sigma) +
+                           " MPa after " + std::to_string(held.size()) +
+                           " held states; the last: " + last.str() +
                            "): raise it, or preparation.wall_speed");
+      }
     };
     // A gas has no stiffness to aim with, and its wall force is a train of collisions: the
     // wall runs at wall_speed until the volume fraction reaches gas_end_phi, whatever the
@@ -160,6 +172,7 @@ std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
     while (true) {
       set_speed(0.0);
       advance(w.relax_time);
+      held.emplace_back(box.len[0] - xs, sigma);
       if (std::abs(target - sigma) < w.tolerance * target) {
         advance(w.final_relax_time);  // and still there after a long relaxation
         if (std::abs(target - sigma) < w.tolerance * target) break;
