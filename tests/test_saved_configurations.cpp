@@ -275,11 +275,19 @@ TEST(SavedConfigurations, StudyStoppedAfterAVariantAndResumedEqualsUninterrupted
   std::string other = text;
   other.replace(other.find("seed = 3"), 8, "seed = 4");
   EXPECT_THROW(run_elastic_moduli(scene(other, "study.toml"), opts), InputError);
+  // The stopped study's folder moved elsewhere resumes there and lists its own
+  // configurations, not the old folder's (the checkpoints store them relative to it).
+  std::filesystem::rename(root / "interrupted", root / "moved");
+  opts.out_dir = (root / "moved").string();
   run_elastic_moduli(scene(text, "study.toml"), opts);
-  EXPECT_FALSE(std::filesystem::exists(root / "interrupted" / "variants"));  // superseded
+  EXPECT_FALSE(std::filesystem::exists(root / "moved" / "variants"));  // superseded
+  const std::string summary =
+      granular::testing::read_text((root / "moved" / "summary.json").string());
+  EXPECT_EQ(summary.find((root / "interrupted").string()), std::string::npos);
+  EXPECT_NE(summary.find((root / "moved" / "configs").string()), std::string::npos);
 
   const H5Reader a((root / "straight" / "results.h5").string());
-  const H5Reader b((root / "interrupted" / "results.h5").string());
+  const H5Reader b((root / "moved" / "results.h5").string());
   for (const char* name : {"/table/K_star", "/table/G_star", "/table/mu_preparation",
                            "/table/eta_G", "/preparation/phi", "/preparation/variant",
                            "/sweep/mu0.5_phi_0.6800/M_star", "/sweep/mu0_phi_0.6800/G_star"}) {

@@ -1,5 +1,6 @@
 #include "scenarios/moduli/moduli_outputs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -160,7 +161,15 @@ void save_moduli_part(const std::string& dir, const std::string& name,
     index << "\n";
   }
   for (const auto& t : part.table_tags) index << "tag " << (t.empty() ? "-" : t) << "\n";
-  for (const auto& p : part.config_paths) index << "config " << p << "\n";
+  // Configurations inside the study's output folder (the parent of `dir`) are stored
+  // relative to it, so a moved or copied folder resumes listing its own files.
+  const std::string out_dir = std::filesystem::path(dir).parent_path().string() + "/";
+  for (const auto& p : part.config_paths) {
+    if (p.compare(0, out_dir.size(), out_dir) == 0)
+      index << "config_in_output " << p.substr(out_dir.size()) << "\n";
+    else
+      index << "config " << p << "\n";
+  }
   h5.commit();
   write_text_file(dir + "/" + name + ".index", index.str());
 }
@@ -190,6 +199,9 @@ bool load_moduli_part(const std::string& dir, const std::string& name,
       rest >> value, part.table_tags.push_back(untag(value));
     } else if (kind == "config") {
       rest >> value, part.add_config(value);
+    } else if (kind == "config_in_output") {  // the rest of the line: spaces allowed
+      value = line.substr(std::min(line.find_first_not_of(' '), line.size()));
+      part.add_config(std::filesystem::path(dir).parent_path().string() + "/" + value);
     } else if (kind == "sweep") {
       ModuliOutputs::SweepMeta m;
       std::string tag;
