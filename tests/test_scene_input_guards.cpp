@@ -160,3 +160,25 @@ TEST(SceneInputGuards, ChainRecordingBeyondMemoryIsRefusedNamingTMax) {
   expect_refused(text, {"t_max", "1e15", "time.t_max"}, check);  // beyond 1e9 samples
   expect_refused(text, {"t_max", "5e8", "time.t_max"}, check);   // profiles beyond memory
 }
+
+// `granular check` refuses a time step the run would refuse (the contact's t_c/50 guard), with
+// the same message naming run.dt; it used to accept it and leave the refusal to the run.
+TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
+  const std::string text = shipped_scene("isotropic_compression.toml");
+  RunOptions opts;
+  opts.check_only = true, opts.progress = false, opts.charts = false;
+  opts.out_dir = granular::testing::unique_temp_path("granular_check_dt").string();
+  auto check = [&](const std::string& t, const std::string& name) {
+    const SceneFile scene = SceneFile::parse(t, name);
+    (void)scene.text("scene");  // read by the command line before it picks the driver
+    run_isotropic_compression(scene, opts);
+  };
+  check(text, "ok.toml");  // the shipped step passes
+  try {
+    check(mutate(text, "dt", "0.4"), "fast.toml");
+    ADD_FAILURE() << "run.dt = 0.4 must be refused in check mode";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir));  // check writes nothing
+}
