@@ -1,6 +1,10 @@
 // Table of scene drivers known to the CLI.
 #include "scenarios/scene_registry.hpp"
 
+#include <filesystem>
+#include <system_error>
+
+#include "core/ensemble.hpp"
 #include "core/error.hpp"
 #include "core/output.hpp"
 
@@ -74,6 +78,14 @@ const SceneEntry& find_scene(const SceneFile& scene) {
 bool begin_outputs(const RunOptions& opts) {
   if (opts.check_only) return false;
   make_directories(opts.out_dir);
+  // A run's outputs never sit beside an earlier run's: the earlier summary, report and
+  // results go before anything new is written, so a run that stops or fails part-way leaves
+  // no summary (nothing that looks finished) and no report of another run.
+  if (ensemble::root())
+    for (const char* name : {"summary.json", "report.html", "results.h5"}) {
+      std::error_code ec;
+      std::filesystem::remove(opts.out_dir + "/" + name, ec);
+    }
   return true;
 }
 

@@ -204,3 +204,32 @@ TEST_F(RunReport, ChromiumLoadsEveryImageWithoutConsoleErrors) {
   EXPECT_GT(std::stoi(m[2].str()), 0);
   EXPECT_EQ(m[3].str(), "0") << "errors on the console";
 }
+
+// A new run into a folder that holds an earlier run's outputs removes them before it writes
+// anything: a run that fails part-way leaves no summary, and neither the earlier summary nor
+// its report beside files of its own (a full disk used to leave a new results.h5 beside the
+// earlier summary.json).
+TEST_F(RunReport, FailedRunLeavesNoEarlierRunsSummaryOrReport) {
+  const std::string folder = dir_ + "/out_failed";
+  fs::create_directories(folder);
+  for (const char* name : {"summary.json", "report.html", "results.h5"})
+    std::ofstream(folder + "/" + name) << "earlier run\n";
+  std::string text = granular::testing::shipped_scene("isotropic_compression.toml");
+  granular::testing::replace_once(text, "dt = 0.004", "dt = 0.4");  // refused by the guard
+  const std::string path = dir_ + "/too_fast.toml";
+  std::ofstream(path) << text;
+  SceneFile scene = SceneFile::load(path);
+  scene.text("scene");
+  RunOptions opts;
+  opts.out_dir = folder;
+  opts.progress = false, opts.charts = false;
+  EXPECT_THROW(run_scene(entry_named("isotropic_compression"), scene, opts), PhysicsError);
+  EXPECT_FALSE(fs::exists(folder + "/summary.json"));
+  EXPECT_FALSE(fs::exists(folder + "/results.h5"));
+  // A report, where one is written, describes this failed run, not the earlier one.
+  if (fs::exists(folder + "/report.html")) {
+    const std::string html = read_text(folder + "/report.html");
+    EXPECT_EQ(html.find("earlier run"), std::string::npos);
+    EXPECT_NE(html.find("failed"), std::string::npos);
+  }
+}

@@ -204,7 +204,7 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
     finish("failed", e.what());
     throw;
   }
-  if (stamp(summary) == before)
+  if (!stamp(summary).exists || stamp(summary) == before)
     finish("stopped",
            "the run stopped before its end (a checkpoint is kept): continue it with --resume");
   else
