@@ -233,3 +233,21 @@ TEST_F(RunReport, FailedRunLeavesNoEarlierRunsSummaryOrReport) {
     EXPECT_NE(html.find("failed"), std::string::npos);
   }
 }
+
+// The report script meets a write error (a full disk, here a folder in the way of its
+// temporary file) with one line that names the file, not a Python traceback, and leaves no
+// report behind.
+TEST_F(RunReport, ReportThatCannotBeWrittenSaysSoInOneLine) {
+  const std::string folder = dir_ + "/out_unwritable";
+  fs::create_directories(folder + "/.report.html.partial");
+  fs::copy_file(out() + "/summary.json", folder + "/summary.json");
+  const std::string log = dir_ + "/report_error.txt";
+  const int rc = granular::testing::run_program(
+      {"/usr/bin/python3", std::string(GRANULAR_SOURCE_DIR) + "/scenarios/plots/report.py", folder},
+      log);
+  const std::string said = read_text(log);
+  EXPECT_EQ(rc, 1) << said;
+  EXPECT_EQ(said.find("Traceback"), std::string::npos) << said;
+  EXPECT_NE(said.find("report.html not written"), std::string::npos) << said;
+  EXPECT_FALSE(fs::exists(folder + "/report.html"));
+}

@@ -334,11 +334,20 @@ def main(argv):
 
     path = os.path.join(out, "report.html")
     tmp = os.path.join(out, ".report.html.partial")
-    with open(tmp, "w", encoding="utf-8") as f:
-        f.write("".join(h))
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write("".join(h))
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        # A full disk or a read-only folder: one line that says what, no traceback, and no
+        # partial file left behind (an earlier report was removed when the run began).
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass
+        sys.exit(f"report.py: {path} not written: {e.strerror or e}")
 
 
 if __name__ == "__main__":
