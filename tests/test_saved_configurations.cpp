@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "core/output.hpp"
@@ -139,6 +141,42 @@ TEST(SavedConfigurations, HdfRoundTripIsBitwiseIncludingContactHistory) {
   EXPECT_EQ(ma.epot, mb.epot);
   EXPECT_EQ(ma.z, m0.z);
   EXPECT_EQ(snapshot(rb, density, mb.pressure).mass, a.mass);
+}
+
+// A damaged configuration (a NaN spin, an infinite history entry, a zero radius, a
+// meaningless history width) is refused on load naming the file and what is wrong, instead of
+// being probed into null moduli.
+TEST(SavedConfigurations, NonFiniteOrNonPositiveValuesAreRefusedOnLoad) {
+  std::vector<double> density;
+  auto sys = compressed_packing(density);
+  const ConfigState good = snapshot(sys, density, sys.measure().pressure);
+  const auto path = granular::testing::unique_temp_path("granular_config_damaged.h5").string();
+  auto refused = [&](const ConfigState& c, const std::string& what) {
+    write_config(path, c);
+    try {
+      read_config(path);
+      ADD_FAILURE() << what << " was read";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(path), std::string::npos) << msg;
+      EXPECT_NE(msg.find(what), std::string::npos) << msg;
+    }
+  };
+  ConfigState c = good;
+  c.w[3 * 7 + 1] = std::nan("");
+  refused(c, "angular velocity of particle 7");
+  c = good;
+  c.history[5] = std::numeric_limits<double>::infinity();
+  refused(c, "contact history entry 5");
+  c = good;
+  c.particles.radius[3] = 0.0;
+  refused(c, "radius of particle 3");
+  c = good;
+  c.particles.x[2] = std::numeric_limits<double>::infinity();
+  refused(c, "position of particle 2");
+  write_config(path, good);
+  EXPECT_NO_THROW(read_config(path));
+  std::filesystem::remove(path);
 }
 
 TEST(SavedConfigurations, ProbingALoadedConfigurationGivesTheInRunModuliBitwise) {

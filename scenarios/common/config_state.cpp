@@ -4,6 +4,8 @@
 //   /contacts/{pair_i, pair_j} and /contacts/history (M x width), attribute history_width.
 #include "scenarios/common/config_state.hpp"
 
+#include <cmath>
+
 #include "kernels/contact_state.hpp"
 
 namespace granular {
@@ -75,7 +77,11 @@ ConfigState read_config(const std::string& path) {
   for (int d = 0; d < 3; ++d) c.box.lo[d] = lo[d], c.box.len[d] = len[d];
   c.phi = in.attribute("/state", "phi");
   c.pressure = in.attribute("/state", "pressure");
-  c.history_width = static_cast<int>(in.attribute("/contacts", "history_width"));
+  const double width = in.attribute("/contacts", "history_width");
+  if (!(width >= 0 && width <= 64) || width != std::floor(width))
+    throw InputError("configuration file " + path + ": contact history width is not a whole " +
+                     "number in [0, 64]");
+  c.history_width = static_cast<int>(width);
   if (in.has("/contacts/pair_i")) {
     c.pair_i = in.ints("/contacts/pair_i");
     c.pair_j = in.ints("/contacts/pair_j");
@@ -93,6 +99,31 @@ ConfigState read_config(const std::string& path) {
       throw InputError("configuration file " + path + ": particle " + std::to_string(i) +
                        " has species " + std::to_string(p.species[i]) + ", outside [0, " +
                        std::to_string(kMaxSpecies) + ")");
+  // Every number finite, sizes and masses positive: a damaged file must be refused here, not
+  // turn into NaN forces (or a run that ends with null results) later.
+  auto refuse = [&](const std::string& what, size_t i) {
+    throw InputError("configuration file " + path + ": " + what + " of particle " +
+                     std::to_string(i) + " is not a finite number" +
+                     (what == "radius" || what == "density" || what == "mass" ? " above 0" : ""));
+  };
+  for (int i = 0; i < n; ++i) {
+    const double xyz[] = {p.x[i], p.y[i], p.z[i]}, v[] = {p.vx[i], p.vy[i], p.vz[i]};
+    for (int d = 0; d < 3; ++d) {
+      if (!std::isfinite(xyz[d])) refuse("the position", i);
+      if (!std::isfinite(v[d])) refuse("the velocity", i);
+      if (!std::isfinite(c.w[3 * i + d])) refuse("the angular velocity", i);
+    }
+    if (!(std::isfinite(p.radius[i]) && p.radius[i] > 0)) refuse("radius", i);
+    if (!(std::isfinite(p.density[i]) && p.density[i] > 0)) refuse("density", i);
+    if (!(std::isfinite(c.mass[i]) && c.mass[i] > 0)) refuse("mass", i);
+  }
+  for (int d = 0; d < 3; ++d)
+    if (!std::isfinite(c.box.lo[d]) || !(std::isfinite(c.box.len[d]) && c.box.len[d] > 0))
+      throw InputError("configuration file " + path + ": the box is not finite and positive");
+  for (size_t r = 0; r < c.history.size(); ++r)
+    if (!std::isfinite(c.history[r]))
+      throw InputError("configuration file " + path + ": contact history entry " +
+                       std::to_string(r) + " is not a finite number");
   return c;
 }
 
