@@ -124,10 +124,13 @@ DeformationTable parse_deformation_table(const std::string& text, const std::str
     first_data_line = false;
     if (v.size() != 10)
       fail("expected 10 values (time and 9 components of F), got " + std::to_string(v.size()));
+    for (double x : v)
+      if (!std::isfinite(x)) fail("not a finite number (nan, inf or beyond the doubles)");
     if (!t.time.empty() && !(v[0] > t.time.back())) fail("time must increase");
     Mat3 F;
     for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = v[1 + k];
-    if (!(F.determinant() > 0)) fail("det F must be positive");
+    if (!(F.determinant() > 0) || !std::isfinite(F.determinant()))
+      fail("det F must be positive and finite");
     t.time.push_back(v[0]);
     t.F.push_back(F);
   }

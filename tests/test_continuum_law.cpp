@@ -292,4 +292,15 @@ TEST(DeformationTable, DrivesThePointThroughTheTabulatedHistory) {
                InputError);  // time must increase
   EXPECT_THROW(parse_deformation_table("0 1 0 0 0 1 0 0 0 1\n1 -1 0 0 0 1 0 0 0 1\n", "t"),
                InputError);  // det F < 0
+  // Values beyond the doubles, nan, or an F whose determinant overflows are refused with
+  // their line, not driven into NaN stresses.
+  for (const char* row :
+       {"1 1e400 0 0 0 1 0 0 0 1", "1 nan 0 0 0 1 0 0 0 1", "1 1e308 0 0 0 1e308 0 0 0 1"}) {
+    try {
+      parse_deformation_table(std::string("0 1 0 0 0 1 0 0 0 1\n") + row + "\n", "huge.csv");
+      ADD_FAILURE() << row << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("huge.csv line 2"), std::string::npos) << e.what();
+    }
+  }
 }
