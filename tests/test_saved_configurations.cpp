@@ -714,3 +714,39 @@ TEST(SavedConfigurations, PerVariantTimeStepLabelsEachSeriesAndKeepsTheProbeDura
   EXPECT_EQ(h.reals("/table/probe_strain_steps"), (std::vector<double>{200.0, 400.0}));
   std::filesystem::remove_all(root);
 }
+
+// A study checkpoint's index closes with the count of its entries: a line lost (which used to
+// resume with a column missing and phi_J null) or a file cut short is refused on resume.
+TEST(SavedConfigurations, CheckpointIndexWithALostLineIsRefused) {
+  const auto dir = granular::testing::unique_temp_path("granular_index_test");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "variants");
+  const std::string parts = (dir / "variants").string();
+  ModuliOutputs part;
+  part.add_row("mu0", {{"K_star", 0.5}, {"G_star", 0.3}, {"phi", 0.68}});
+  part.add_row("mu0", {{"K_star", 0.4}, {"G_star", 0.2}, {"phi", 0.66}});
+  part.add_config((dir / "configs" / "phi_0.6800.h5").string());
+  save_moduli_part(parts, "v", "fp", part);
+  ModuliOutputs back;
+  ASSERT_TRUE(load_moduli_part(parts, "v", "fp", back));
+  EXPECT_EQ(back.table.at("K_star"), (std::vector<double>{0.5, 0.4}));
+  EXPECT_EQ(back.config_paths, part.config_paths);
+
+  const std::string index = parts + "/v.index";
+  const std::string text = granular::testing::read_text(index);
+  auto refused = [&](const std::string& damaged, const std::string& what) {
+    std::ofstream(index) << damaged;
+    ModuliOutputs p;
+    try {
+      load_moduli_part(parts, "v", "fp", p);
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+    }
+  };
+  const size_t table_line = text.find("table G_star\n");
+  ASSERT_NE(table_line, std::string::npos);
+  refused(text.substr(0, table_line) + text.substr(table_line + 13), "a dropped table line");
+  refused(text.substr(0, text.rfind("end ")), "no end line");
+  std::filesystem::remove_all(dir);
+}

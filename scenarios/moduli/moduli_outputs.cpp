@@ -170,8 +170,12 @@ void save_moduli_part(const std::string& dir, const std::string& name,
     else
       index << "config " << p << "\n";
   }
+  // The number of entry lines closes the index: a line lost or cut off is then noticed on
+  // resume instead of leaving a column out of the results.
+  const std::string body = index.str();
+  const long lines = std::count(body.begin(), body.end(), '\n') - 1;
   h5.commit();
-  write_text_file(dir + "/" + name + ".index", index.str());
+  write_text_file(dir + "/" + name + ".index", body + "end " + std::to_string(lines) + "\n");
 }
 
 bool load_moduli_part(const std::string& dir, const std::string& name,
@@ -188,10 +192,18 @@ bool load_moduli_part(const std::string& dir, const std::string& name,
                      "into an empty output directory");
   H5Reader h5(dir + "/" + name + ".h5");
   auto untag = [](const std::string& t) { return t == "-" ? std::string() : t; };
+  long entries = 0, declared = -1;
   while (in >> kind) {
     std::getline(in, line);
     std::istringstream rest(line);
-    if (kind == "table") {
+    if (declared >= 0)
+      throw InputError(index_path +
+                       ": lines after its end; the checkpoint is damaged: run "
+                       "without --resume into an empty output directory");
+    if (kind != "end") ++entries;
+    if (kind == "end") {
+      if (!(rest >> declared) || declared < 0) declared = -2;
+    } else if (kind == "table") {
       rest >> value, part.table[value] = h5.reals("/table/" + value);
     } else if (kind == "prep") {
       rest >> value, part.prep[value] = h5.reals("/preparation/" + value);
@@ -214,6 +226,15 @@ bool load_moduli_part(const std::string& dir, const std::string& name,
       throw InputError(index_path + ": unreadable checkpoint index line '" + kind + line + "'");
     }
   }
+  if (declared != entries)
+    throw InputError(index_path + ": " +
+                     (declared < 0 ? std::string("no end line")
+                                   : std::to_string(entries) +
+                                         " entries where its end line "
+                                         "counts " +
+                                         std::to_string(declared)) +
+                     "; the checkpoint is damaged or cut short: run without --resume into an "
+                     "empty output directory");
   return true;
 }
 
