@@ -181,4 +181,18 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
     EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(opts.out_dir));  // check writes nothing
+  // The soft box: its settling system (particles, walls, gravity) is built in check mode too.
+  const std::string box = shipped_scene("confined_compression_quick.toml");
+  auto check_box = [&](const std::string& t) {
+    const SceneFile scene = SceneFile::parse(t, "box.toml");
+    (void)scene.text("scene");
+    run_confined_compression(scene, opts);
+  };
+  check_box(box);
+  try {
+    check_box(mutate(box, "time_step", "1e4"));
+    ADD_FAILURE() << "compression.time_step = 1e4 must be refused in check mode";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("compression.time_step"), std::string::npos) << e.what();
+  }
 }

@@ -112,25 +112,44 @@ PeriodicBox closed_box(const Setup& c, double height) {
   return box;
 }
 
-template <class Model>
-ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, Json& out) {
+// The poured packing and the settling system around it (walls set), as the preparation
+// starts; `granular check` builds it too, so it applies the run's time-step guards.
+struct Pour {
+  HostParticles h;
+  double mean_mass = 0, mean_d = 0;
+};
+Pour pour(const Setup& c) {
   PeriodicBox region_box = closed_box(c, c.region_height);
   FillSpec f = c.fill;
   for (int d = 0; d < 3; ++d) f.lo[d] = 0, f.hi[d] = d == 2 ? c.region_height : c.size[d];
-  const HostParticles h = fill_region(f, region_box);
-  double mean_mass = 0, mean_d = 0;
-  for (int i = 0; i < h.size(); ++i) {
-    mean_mass += h.density[i] * 4.0 / 3.0 * M_PI * std::pow(h.radius[i], 3) / h.size();
-    mean_d += 2 * h.radius[i] / h.size();
+  Pour p;
+  p.h = fill_region(f, region_box);
+  for (int i = 0; i < p.h.size(); ++i) {
+    p.mean_mass += p.h.density[i] * 4.0 / 3.0 * M_PI * std::pow(p.h.radius[i], 3) / p.h.size();
+    p.mean_d += 2 * p.h.radius[i] / p.h.size();
   }
+  return p;
+}
+template <class Model>
+DemSystem<Exec, Model> settling_system(const Model& model, const Setup& c, const Pour& p) {
   DemParams prm;
   prm.dt_key = "compression.time_step";
   prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
   prm.gravity[2] = -c.gravity;
-  prm.damping.translational = mean_mass / c.damping_time;
-  prm.damping.rotational = 0.1 * mean_mass * mean_d * mean_d / c.damping_time;
-  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), region_box, model, prm);
+  prm.damping.translational = p.mean_mass / c.damping_time;
+  prm.damping.rotational = 0.1 * p.mean_mass * p.mean_d * p.mean_d / c.damping_time;
+  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(p.h), closed_box(c, c.region_height), model,
+                             prm);
   sys.set_walls(box_walls(c, c.region_height));
+  return sys;
+}
+
+template <class Model>
+ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, Json& out) {
+  const Pour p = pour(c);
+  const HostParticles& h = p.h;
+  const double mean_mass = p.mean_mass, mean_d = p.mean_d;
+  DemSystem<Exec, Model> sys = settling_system(model, c, p);
   // Settled: mean kinetic energy per particle below ratio x (mean weight x mean diameter).
   const double e_ref = mean_mass * std::max(c.gravity, 1e-300) * mean_d;
   const long max_steps = static_cast<long>(c.settle_max_time / c.dt);
@@ -283,6 +302,8 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
 
 void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   const Setup c = read_setup(scene);
+  if (opts.check_only)
+    with_material_model(c.mats, [&](const auto& m) { settling_system(m, c, pour(c)); });
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
