@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "core/scene_file.hpp"
 
 namespace granular {
@@ -41,6 +42,19 @@ const SceneEntry& find_scene(const SceneFile& scene);
 // computes anything: it creates the output directory and returns true, or in check mode
 // returns false and the driver returns.
 bool begin_outputs(const RunOptions& opts);
+
+// In check mode, builds the run's first system with `build()` so that the run's guards (the
+// time step against the stiffest contact, the dashpots) apply to `granular check` too; a
+// guard's refusal is reported as an input error naming the scene file. Nothing in run mode.
+template <class Build>
+void check_first_system(const SceneFile& scene, const RunOptions& opts, Build&& build) {
+  if (!opts.check_only) return;
+  try {
+    build();
+  } catch (const PhysicsError& e) {
+    throw InputError("scene file " + scene.path() + ": " + e.what());
+  }
+}
 
 // Scene drivers (one per scenarios/scene_*.cpp file).
 // DEM scenes

@@ -177,8 +177,9 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
   try {
     check(mutate(text, "dt", "0.4"), "fast.toml");
     ADD_FAILURE() << "run.dt = 0.4 must be refused in check mode";
-  } catch (const PhysicsError& e) {
+  } catch (const InputError& e) {  // the run's message, naming the scene file
     EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fast.toml"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(opts.out_dir));  // check writes nothing
   // The soft box: its settling system (particles, walls, gravity) is built in check mode too.
@@ -192,7 +193,8 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
   try {
     check_box(mutate(box, "time_step", "1e4"));
     ADD_FAILURE() << "compression.time_step = 1e4 must be refused in check mode";
-  } catch (const PhysicsError& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("compression.time_step"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("box.toml"), std::string::npos) << e.what();
   }
 }

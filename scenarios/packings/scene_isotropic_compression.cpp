@@ -116,12 +116,10 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   scene.require(relax_steps >= 0, "compression.relax_steps", "must not be negative");
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
-  if (opts.check_only) {
-    // `granular check` applies the run's time-step guard too: the first system is built
-    // (from the same gas) and thrown away.
+  check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away
     PeriodicBox first_box;
     System(Particles<Exec>::from_host(random_gas(gas, first_box)), first_box, model, params);
-  }
+  });
 
   if (!begin_outputs(opts)) return;
   const std::string checkpoint = opts.out_dir + "/checkpoint.h5";

@@ -302,8 +302,9 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
 
 void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   const Setup c = read_setup(scene);
-  if (opts.check_only)
+  check_first_system(scene, opts, [&] {
     with_material_model(c.mats, [&](const auto& m) { settling_system(m, c, pour(c)); });
+  });
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
   Json summary = Json::object();
