@@ -197,4 +197,19 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
     EXPECT_NE(std::string(e.what()).find("compression.time_step"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("box.toml"), std::string::npos) << e.what();
   }
+  // The wave column: its servo's first system and walls.
+  const std::string column = shipped_scene("wave_transmission_quick.toml");
+  auto check_column = [&](const std::string& t) {
+    const SceneFile scene = SceneFile::parse(t, "column.toml");
+    (void)scene.text("scene");
+    run_wave_transmission(scene, opts);
+  };
+  check_column(column);
+  try {
+    check_column(mutate(column, "dt", "5.0"));
+    ADD_FAILURE() << "run.dt = 5 must be refused in check mode";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("column.toml"), std::string::npos) << e.what();
+  }
 }

@@ -105,20 +105,30 @@ DemParams params_of(const WaveSetup& w, double damping_time, double mass) {
   return p;
 }
 
+// The gas the servo starts from, as a system (no walls yet); `granular check` builds it too.
+template <class Model>
+DemSystem<Exec, Model> servo_system(const Model& model, const WaveSetup& w, const HostParticles& h,
+                                    const PeriodicBox& box) {
+  double s = 0;
+  for (int i = 0; i < h.size(); ++i) s += h.density[i] * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+  return DemSystem<Exec, Model>(Particles<Exec>::from_host(h), box, model,
+                                params_of(w, w.damping_time, s / h.size()));
+}
+
+// The preparation's friction on the particles' materials.
+MaterialSet preparation_materials(const WaveSetup& w) {
+  MaterialSet m = w.mats;
+  for (int sp : w.species) m.materials[sp].friction = w.prep_friction;
+  return m;
+}
+
 // Loading branch: the servo drives the source wall until sigma_xx is within the tolerance
 // of each target, then the packing relaxes with the wall held; a state is kept per target.
 template <class Model>
 std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
                               const std::vector<double>& density, const HostParticles& h,
                               const PeriodicBox& box, const RunOptions& opts) {
-  const double m0 = [&] {
-    double s = 0;
-    for (int i = 0; i < h.size(); ++i)
-      s += h.density[i] * 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
-    return s / h.size();
-  }();
-  DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model,
-                             params_of(w, w.damping_time, m0));
+  DemSystem<Exec, Model> sys = servo_system(model, w, h, box);
   const double area = box.len[1] * box.len[2];
   double xs = 0;
   auto set_speed = [&](double v) {  // source wall moving at v (into the sample) from now on
@@ -408,13 +418,20 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   const long snapshot_every = scene.integer("output.snapshot_every", 0);
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
+  check_first_system(scene, opts, [&] {
+    PeriodicBox b;
+    const HostParticles g = gas(w, b);
+    with_material_model(preparation_materials(w), [&](const auto& m) {
+      auto sys = servo_system(m, w, g, b);
+      sys.set_walls(column_walls(w, b, 0.0));  // the walls' contacts are guarded too
+    });
+  });
   if (!begin_outputs(opts)) return;
   const auto wall0 = std::chrono::steady_clock::now();
   PeriodicBox box;
   const HostParticles h = gas(w, box);
   std::vector<double> density(h.density);
-  MaterialSet prep_mats = w.mats;  // preparation friction on the particles' materials
-  for (int sp : w.species) prep_mats.materials[sp].friction = w.prep_friction;
+  const MaterialSet prep_mats = preparation_materials(w);
   std::vector<Prepared> states;
   with_material_model(prep_mats,
                       [&](const auto& m) { states = prepare(m, w, density, h, box, opts); });
