@@ -164,52 +164,33 @@ TEST(SceneInputGuards, ChainRecordingBeyondMemoryIsRefusedNamingTMax) {
 // `granular check` refuses a time step the run would refuse (the contact's t_c/50 guard), with
 // the same message naming run.dt; it used to accept it and leave the refusal to the run.
 TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
-  const std::string text = shipped_scene("isotropic_compression.toml");
   RunOptions opts;
   opts.check_only = true, opts.progress = false, opts.charts = false;
   opts.out_dir = granular::testing::unique_temp_path("granular_check_dt").string();
-  auto check = [&](const std::string& t, const std::string& name) {
-    const SceneFile scene = SceneFile::parse(t, name);
-    (void)scene.text("scene");  // read by the command line before it picks the driver
-    run_isotropic_compression(scene, opts);
+  // The shipped scene passes check; with `key = value` check refuses it with the run's
+  // message (`advice`), naming the scene file.
+  auto expect = [&](const char* file, void (*run)(const SceneFile&, const RunOptions&),
+                    const char* key, const char* value, const char* advice) {
+    const std::string text = shipped_scene(file);
+    auto check = [&](const std::string& t, const std::string& name) {
+      const SceneFile scene = SceneFile::parse(t, name);
+      (void)scene.text("scene");  // read by the command line before it picks the driver
+      run(scene, opts);
+    };
+    check(text, "ok.toml");
+    try {
+      check(mutate(text, key, value), "fast.toml");
+      ADD_FAILURE() << file << ": " << key << " = " << value << " must be refused by check";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(advice), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("fast.toml"), std::string::npos) << e.what();
+    }
   };
-  check(text, "ok.toml");  // the shipped step passes
-  try {
-    check(mutate(text, "dt", "0.4"), "fast.toml");
-    ADD_FAILURE() << "run.dt = 0.4 must be refused in check mode";
-  } catch (const InputError& e) {  // the run's message, naming the scene file
-    EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("fast.toml"), std::string::npos) << e.what();
-  }
+  expect("isotropic_compression.toml", run_isotropic_compression, "dt", "0.4", "set run.dt <=");
   EXPECT_FALSE(std::filesystem::exists(opts.out_dir));  // check writes nothing
   // The soft box: its settling system (particles, walls, gravity) is built in check mode too.
-  const std::string box = shipped_scene("confined_compression_quick.toml");
-  auto check_box = [&](const std::string& t) {
-    const SceneFile scene = SceneFile::parse(t, "box.toml");
-    (void)scene.text("scene");
-    run_confined_compression(scene, opts);
-  };
-  check_box(box);
-  try {
-    check_box(mutate(box, "time_step", "1e4"));
-    ADD_FAILURE() << "compression.time_step = 1e4 must be refused in check mode";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("compression.time_step"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("box.toml"), std::string::npos) << e.what();
-  }
+  expect("confined_compression_quick.toml", run_confined_compression, "time_step", "1e4",
+         "compression.time_step");
   // The wave column: its servo's first system and walls.
-  const std::string column = shipped_scene("wave_transmission_quick.toml");
-  auto check_column = [&](const std::string& t) {
-    const SceneFile scene = SceneFile::parse(t, "column.toml");
-    (void)scene.text("scene");
-    run_wave_transmission(scene, opts);
-  };
-  check_column(column);
-  try {
-    check_column(mutate(column, "dt", "5.0"));
-    ADD_FAILURE() << "run.dt = 5 must be refused in check mode";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("set run.dt <="), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("column.toml"), std::string::npos) << e.what();
-  }
+  expect("wave_transmission_quick.toml", run_wave_transmission, "dt", "5.0", "set run.dt <=");
 }
