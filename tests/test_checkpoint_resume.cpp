@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <string>
 
+#include "core/error.hpp"
 #include "core/output.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"
@@ -103,5 +106,35 @@ TEST(CheckpointResume, CheckpointIntervalLeavesTheTrajectoryBitwiseUnchanged) {
     EXPECT_EQ(finals[k], finals[0]) << k;
     EXPECT_EQ(builds[k], builds[0]) << k;
   }
+  std::filesystem::remove_all(root);
+}
+
+// Six garbled bytes in a checkpoint used to resume the run with other results, exit 0: the
+// file's checksum now refuses it, naming the file, before any state is taken from it.
+TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
+  const auto root = granular::testing::unique_temp_path("granular_garbled_checkpoint");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  opts.out_dir = (root / "run").string();
+  run_isotropic_compression(scene(std::string(kScene) + "stop_after = 3000\n", "a.toml"), opts);
+  const std::string checkpoint = (root / "run" / "checkpoint.h5").string();
+  ASSERT_TRUE(std::filesystem::exists(checkpoint));
+  {
+    std::fstream f(checkpoint, std::ios::in | std::ios::out | std::ios::binary);
+    const auto size = static_cast<std::streamoff>(std::filesystem::file_size(checkpoint));
+    for (int k = 1; k <= 6; ++k) {
+      f.seekp(size * k / 7);
+      f.put('\x7f');
+    }
+  }
+  opts.resume = true;
+  try {
+    run_isotropic_compression(scene(kScene, "a.toml"), opts);
+    FAIL() << "a garbled checkpoint was resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(checkpoint), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(root / "run" / "results.h5"));
   std::filesystem::remove_all(root);
 }
