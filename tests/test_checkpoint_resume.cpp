@@ -138,3 +138,40 @@ TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
   EXPECT_FALSE(std::filesystem::exists(root / "run" / "results.h5"));
   std::filesystem::remove_all(root);
 }
+
+// A checkpoint whose restart datasets have another size (here a file without the checksum,
+// as older versions and other tools write) is refused naming the checkpoint, where the message
+// used to name only "restart group /restart".
+TEST(CheckpointResume, RestartDatasetOfAnotherSizeIsRefusedNamingTheCheckpoint) {
+  const auto root = granular::testing::unique_temp_path("granular_restart_size");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  opts.out_dir = (root / "run").string();
+  run_isotropic_compression(scene(std::string(kScene) + "stop_after = 3000\n", "a.toml"), opts);
+  const std::string checkpoint = (root / "run" / "checkpoint.h5").string();
+  {
+    const hid_t file = H5Fopen(checkpoint.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    ASSERT_GE(H5Ldelete(file, "/restart/scalars", H5P_DEFAULT), 0);
+    const hsize_t dims[1] = {3};
+    const double three[3] = {0, 0, 0};
+    const hid_t space = H5Screate_simple(1, dims, nullptr);
+    const hid_t set = H5Dcreate2(file, "/restart/scalars", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT,
+                                 H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(set, 0);
+    H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, three);
+    H5Dclose(set), H5Sclose(space), H5Fclose(file);
+    std::fstream f(checkpoint, std::ios::in | std::ios::out | std::ios::binary);
+    f.write(std::string(512, '\0').data(), 512);  // no checksum tag: read as it is
+  }
+  opts.resume = true;
+  try {
+    run_isotropic_compression(scene(kScene, "a.toml"), opts);
+    FAIL() << "a checkpoint with malformed restart scalars was resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(checkpoint), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scalars"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(root);
+}

@@ -5,6 +5,7 @@
 // out of memory. `inf` stays legal where it means something (a rigid material).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -16,6 +17,7 @@
 
 using namespace granular;
 using granular::testing::shipped_scene;
+using granular::testing::shipped_scene_path;
 using granular::testing::temp_dir;
 
 namespace {
@@ -35,20 +37,22 @@ struct Mutant {
   const char* full_key;  // what the message must name
 };
 
+// `name` is the scene file's name (its folder resolves the relative input paths inside it).
 void expect_refused(const std::string& text, const Mutant& m,
-                    void (*run)(const SceneFile&, const RunOptions&)) {
+                    void (*run)(const SceneFile&, const RunOptions&),
+                    const std::string& name = "mutant.toml") {
   RunOptions opts;
   opts.out_dir = granular::testing::unique_temp_path("granular_guard").string();
   opts.progress = false, opts.charts = false;
   try {
-    SceneFile scene = SceneFile::parse(mutate(text, m.key, m.value), "mutant.toml");
+    SceneFile scene = SceneFile::parse(mutate(text, m.key, m.value), name);
     (void)scene.text("scene");
     run(scene, opts);
     ADD_FAILURE() << m.full_key << " = " << m.value << " must be refused";
   } catch (const InputError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find(m.full_key), std::string::npos) << m.value << ": " << what;
-    EXPECT_NE(what.find("mutant.toml"), std::string::npos) << what;
+    EXPECT_NE(what.find(name), std::string::npos) << what;
   }
 }
 
@@ -193,4 +197,58 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
          "compression.time_step");
   // The wave column: its servo's first system and walls.
   expect("wave_transmission_quick.toml", run_wave_transmission, "dt", "5.0", "set run.dt <=");
+}
+
+// Messages that used to name neither the key nor the file ("particle 0 has a non-positive
+// radius or density", "gas volume fraction must be in (0, 0.45]", a deformation table's
+// line without the key that names it) now name both, before anything runs.
+TEST(SceneInputGuards, BadDiametersGasFractionAndHistoryTableAreRefusedNamingKeyAndFile) {
+  expect_refused(shipped_scene("hysteretic_collision.toml"),
+                 {"diameter_1", "0", "particles.diameter_1"}, run_hysteretic_collision);
+  // The continuum fit resolves its study folders from the scene file's folder.
+  const std::string here =
+      (std::filesystem::path(shipped_scene_path("continuum_fit_quick.toml")).parent_path() /
+       "mutant.toml")
+          .string();
+  auto check_fit = [](const SceneFile& s, const RunOptions&) { check_continuum_fit(s); };
+  const std::string fit = shipped_scene("continuum_fit_quick.toml");
+  expect_refused(fit, {"phi_gas", "0", "shear.phi_gas"}, check_fit, here);
+  const std::string table = temp_dir("bad_history") + "/history.csv";
+  {
+    std::ofstream out(table);
+    out << "time,F11,F12,F13,F21,F22,F23,F31,F32,F33\n0,1,0,0,0,1,0,0,0,1\n"
+        << "0,1,0,0,0,1,0,0,0,1\n";  // time does not increase
+  }
+  const std::string quoted = "\"" + table + "\"";
+  expect_refused(fit, {"file", quoted.c_str(), "history.file"}, check_fit, here);
+}
+
+// Two traces whose picked delay is not positive (trace2 is the nearer receiver): refused
+// naming trace2.file and the scene, where the spectral ratio used to fail naming neither.
+TEST(SceneInputGuards, SwappedTracesAreRefusedNamingTheTraceKey) {
+  std::string text = shipped_scene("signal_analysis_traces.toml");
+  const std::string one = "signal_example_trace1.csv", two = "signal_example_trace2.csv";
+  const auto a = text.find(one), b = text.find(two);
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  text.replace(b, two.size(), one);
+  text.replace(a, one.size(), two);
+  const std::string name =
+      (std::filesystem::path(shipped_scene_path("signal_analysis_traces.toml")).parent_path() /
+       "swapped.toml")
+          .string();
+  RunOptions opts;
+  opts.out_dir = granular::testing::unique_temp_path("granular_swapped").string();
+  opts.progress = false, opts.charts = false;
+  try {
+    const SceneFile scene = SceneFile::parse(text, name);
+    (void)scene.text("scene");  // read by the command line before it picks the driver
+    run_signal_analysis(scene, opts);
+    ADD_FAILURE() << "swapped traces must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("trace2.file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
+  std::filesystem::remove_all(opts.out_dir);
 }

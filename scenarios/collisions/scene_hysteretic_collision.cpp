@@ -25,6 +25,9 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   scene.require(k1 > 0 && k1 <= k2, "contact.k1_over_k2", "must be in (0, 1]");
   for (double r : kc_ratios) scene.require(r >= 0, "contact.kc_over_k2", "must not be negative");
   scene.require(speed > 0, "collision.impact_speed", "must be positive");
+  scene.require(density > 0, "particles.density", "must be positive");
+  scene.require(d1 > 0, "particles.diameter_1", "must be positive");
+  scene.require(d2 > 0, "particles.diameter_2", "must be positive");
   scene.require(resolution >= 50, "collision.steps_per_contact", "must be at least 50");
   scene.reject_unknown_keys();
 

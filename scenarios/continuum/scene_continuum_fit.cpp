@@ -32,6 +32,7 @@ struct Setup {
   double example_step = 0, example_nu_end = 0;
   // A deformation-gradient history (file of time and F rows) driven through one fitted law.
   std::string history_file, history_data;
+  DeformationTable history_table;  // read with the keys, so a bad table fails before the fits
   double history_fit_mu = 0, history_nu_start = 0;
   int history_substeps = 1;
   bool shear = false;
@@ -62,6 +63,11 @@ Setup read_setup(const SceneFile& scene) {
     scene.require(s.history_nu_start > 0 && s.history_nu_start < 1, "history.nu_start",
                   "must lie in (0, 1)");
     scene.require(s.history_substeps >= 1, "history.substeps", "must be at least 1");
+    try {
+      s.history_table = read_deformation_table(s.history_file);
+    } catch (const InputError& e) {
+      scene.require(false, "history.file", e.what());
+    }
   }
   s.shear = scene.flag("shear.run");
   if (s.shear) {
@@ -90,6 +96,12 @@ Setup read_setup(const SceneFile& scene) {
     d.strain_rate = scene.real("shear.strain_rate");
     d.samples = scene.small_integer("shear.samples");
     scene.require(d.gas.count >= 10, "shear.count", "must be at least 10");
+    scene.require(d.gas.phi > 0 && d.gas.phi <= 0.45, "shear.phi_gas",
+                  "must be in (0, 0.45]: random insertion jams above");
+    scene.require(d.gas.diameter_min > 0, "shear.diameter_min", "must be positive");
+    scene.require(d.gas.diameter_max >= d.gas.diameter_min, "shear.diameter_max",
+                  "must be at least shear.diameter_min");
+    scene.require(d.gas.density > 0, "shear.density", "must be positive");
     scene.require(d.phi > d.gas.phi && d.phi < 0.9, "shear.phi",
                   "must lie in (shear.phi_gas, 0.9)");
     scene.require(d.strain > 0 && d.strain < 0.2, "shear.strain", "must lie in (0, 0.2)");
@@ -324,7 +336,7 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
     if (it == fits.end())
       throw InputError(scene.path() + ": history.data / history.fit_mu name no fitted data set (" +
                        k.str() + ")");
-    const DeformationTable table = read_deformation_table(s.history_file);
+    const DeformationTable& table = s.history_table;
     MaterialPoint p(it->second.law, s.history_nu_start, s.update);
     const PathRecord r = drive_table(p, table, s.history_substeps);
     std::vector<double> time = {table.time.front()};

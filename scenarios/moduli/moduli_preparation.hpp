@@ -169,7 +169,11 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
       sys.emplace(restart_system<System>(read_config(ck.state(k)),
                                          k < relaxed_stage ? gas_model : model, s.params));
       const H5Reader restart(ck.restart(k));
-      sys->load_restart(restart, "/restart");
+      try {
+        sys->load_restart(restart, "/restart");
+      } catch (const InputError& e) {
+        throw InputError("--resume: " + ck.restart(k) + ": " + e.what() + "; run without --resume");
+      }
       // The protocol's own state: the rate and direction the next stage starts from (a
       // save right after the checkpoint reports its inertial number with them).
       if (restart.has("/protocol/rate_and_direction")) {

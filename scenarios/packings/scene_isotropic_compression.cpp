@@ -150,7 +150,11 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     H5Reader in(checkpoint);
     if (!in.has("/restart"))
       throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
-    sys.load_restart(in, "/restart");
+    try {
+      sys.load_restart(in, "/restart");
+    } catch (const InputError& e) {
+      throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
+    }
   }
 
   // Per-axis rate for the volumetric rate: V(t) = V0 exp(-rate t) in the limit dt -> 0.

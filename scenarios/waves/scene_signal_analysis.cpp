@@ -213,6 +213,17 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
                     ? Json(picked_time(p[1], w) - picked_time(p[0], w))
                     : Json();
       summary["travel_time_differences"] = tt;
+      if (delay < 0) {
+        // The ratio needs trace2 to be the farther receiver: a delay that is not positive
+        // means the files are swapped, or the picker caught noise.
+        const double picked =
+            picked_time(p[1], settings.delay_picker) - picked_time(p[0], settings.delay_picker);
+        std::ostringstream why;
+        why << "the " << settings.delay_picker << " of trace2 comes " << picked
+            << " after that of trace1, which is not positive: trace2.file must hold the"
+            << " farther receiver, or set analysis.ratio.delay";
+        scene.require(picked > 0, "trace2.file", why.str());
+      }
       const SpectralRatioFit f = analyse_ratio(tr[0], p[0], tr[1], p[1], settings, delay);
       summary["spectral_ratio"] = ratio_json(f);
       h5.write("/ratio/frequency", f.f);
