@@ -197,6 +197,9 @@ TEST(SceneInputGuards, CheckModeAppliesTheRunsTimeStepGuard) {
          "compression.time_step");
   // The wave column: its servo's first system and walls.
   expect("wave_transmission_quick.toml", run_wave_transmission, "dt", "5.0", "set run.dt <=");
+  // The moduli studies: each variant's gas with its preparation law; each mixture's gas.
+  expect("moduli_linear_quick.toml", run_elastic_moduli, "dt", "0.4", "set run.dt <=");
+  expect("mixture_moduli_quick.toml", run_mixture_moduli, "dt", "5.0", "set run.dt <=");
 }
 
 // Messages that used to name neither the key nor the file ("particle 0 has a non-positive

@@ -16,7 +16,7 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
   if (s.count < 1) throw InputError("particle count must be positive");
   if (!(s.diameter_min > 0) || s.diameter_max < s.diameter_min)
     throw InputError("diameters must satisfy 0 < diameter_min <= diameter_max");
-  if (!(s.phi > 0) || s.phi > 0.45)
+  if (!(s.phi > 0) || s.phi > kMaxGasFraction)
     throw InputError("gas volume fraction must be in (0, 0.45]: random insertion jams above");
   const int n = s.count;
   HostParticles h;
@@ -99,7 +99,8 @@ void check_gas(const SceneFile& scene, const GasSpec& g, const std::string& phi_
                 "is sized by the largest particle)");
   scene.require(g.density > 0, "particles.density", "must be positive");
   scene.require(g.speed >= 0, "particles.initial_speed", "must not be negative");
-  scene.require(g.phi >= 1e-3 && g.phi <= 0.5, phi_key, "must lie in [0.001, 0.5]");
+  scene.require(g.phi >= 1e-3 && g.phi <= kMaxGasFraction, phi_key,
+                "must lie in [0.001, 0.45]: random insertion jams above");
   // The box edge (N V_max / phi)^(1/3) and its volume must stay finite.
   const double v_max = M_PI / 6 * g.diameter_max * g.diameter_max * g.diameter_max;
   scene.require(std::isfinite(v_max * g.count / g.phi), "particles.diameter_max",

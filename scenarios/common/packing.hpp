@@ -17,6 +17,10 @@ struct GasSpec {
   std::uint64_t seed = 1;  // all randomness derives from (seed, particle index)
 };
 
+// The densest gas random sequential insertion reaches reliably (it jams near 0.38 for equal
+// spheres and somewhat above for polydisperse ones; a scene compresses from there).
+constexpr double kMaxGasFraction = 0.45;
+
 // Random sequential insertion, largest particles first; zero total momentum.
 // Throws InputError when the requested volume fraction cannot be reached by insertion.
 HostParticles random_gas(const GasSpec& spec, PeriodicBox& box);

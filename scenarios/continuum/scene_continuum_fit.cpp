@@ -12,6 +12,7 @@
 
 #include "core/deformation_paths.hpp"
 #include "core/output.hpp"
+#include "scenarios/common/packing.hpp"
 #include "scenarios/continuum/continuum_fitting.hpp"
 #include "scenarios/continuum/continuum_shear_dem.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -96,7 +97,7 @@ Setup read_setup(const SceneFile& scene) {
     d.strain_rate = scene.real("shear.strain_rate");
     d.samples = scene.small_integer("shear.samples");
     scene.require(d.gas.count >= 10, "shear.count", "must be at least 10");
-    scene.require(d.gas.phi > 0 && d.gas.phi <= 0.45, "shear.phi_gas",
+    scene.require(d.gas.phi > 0 && d.gas.phi <= kMaxGasFraction, "shear.phi_gas",
                   "must be in (0, 0.45]: random insertion jams above");
     scene.require(d.gas.diameter_min > 0, "shear.diameter_min", "must be positive");
     scene.require(d.gas.diameter_max >= d.gas.diameter_min, "shear.diameter_max",

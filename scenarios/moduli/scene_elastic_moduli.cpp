@@ -44,8 +44,36 @@ using namespace moduli_study;
 
 void check_elastic_moduli(const SceneFile& scene) { read_setup(scene); }
 
+namespace {
+// The contact law a variant is prepared with: its own friction and cohesion where it lists
+// them.
+template <class Model>
+Model preparation_model(const Model& model, const PrepVariant& v) {
+  Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
+  if (!std::isnan(v.kc)) prep = with_cohesion(prep, v.kc);
+  return prep;
+}
+}  // namespace
+
 void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup s = read_setup(scene);
+  check_first_system(scene, opts, [&] {  // each variant's gas and laws, as prepare() builds
+    if (!s.start_from.empty()) return;   // them (a saved configuration is probed as it is)
+    with_contact_model(s.contact, [&](const auto& model) {
+      using System = DemSystem<Exec, std::decay_t<decltype(model)>>;
+      for (const PrepVariant& v : s.variants) {
+        const Setup sv = for_variant(s, v);
+        GasSpec gas = sv.gas;
+        gas.count = v.count, gas.seed = v.seed;
+        PeriodicBox box;
+        const HostParticles host = random_gas(gas, box);
+        const auto prep = preparation_model(model, v);
+        System(Particles<Exec>::from_host(host), box, prep, sv.params);
+        if (sv.friction_from_phi0)
+          System(Particles<Exec>::from_host(host), box, with_friction(prep, 0.0), sv.params);
+      }
+    });
+  });
   if (!begin_outputs(opts)) return;
   Json summary = Json::object();
   summary["scene"] = "elastic_moduli";
@@ -123,8 +151,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         return;
       }
       ++prepared;
-      Model prep = std::isnan(v.mu) ? model : with_friction(model, v.mu);
-      if (!std::isnan(v.kc)) prep = with_cohesion(prep, v.kc);
+      const Model prep = preparation_model(model, v);
       const double kc = std::isnan(v.kc)
                             ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0)
                             : v.kc;

@@ -230,6 +230,14 @@ DemParams with_damping(DemParams p, double tau, double m, double d) {
   return p;
 }
 
+// The gas stage's parameters: damping scaled with this packing's mean mass and diameter.
+DemParams gas_params(const Setup& u, const HostParticles& host) {
+  double dsum = 0;
+  for (int i = 0; i < host.size(); ++i) dsum += 2 * host.radius[i];
+  const double dbar = dsum / host.size(), mbar = total_mass(host) / host.size();
+  return with_damping(u.params, u.gas_damping_time, mbar, dbar);
+}
+
 MixtureModel with_friction(MixtureModel m, double mu) {
   for (auto& row : m.tangential.table.p)
     for (auto& q : row) q.mu_s = q.mu_d = mu;
@@ -273,8 +281,7 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
   const double dbar = dsum / host.size(), mbar = mass / host.size();
   const double rho_solid = mass / vsolid;
   std::optional<System> sys;
-  sys.emplace(Particles<Exec>::from_host(host), box, model,
-              with_damping(u.params, u.gas_damping_time, mbar, dbar));
+  sys.emplace(Particles<Exec>::from_host(host), box, model, gas_params(u, host));
   // Gas: fast compression to phi_0, a relaxation, then a slower one until the packing carries
   // the first pressure (the servo takes over from there).
   strain_to_phi(*sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
@@ -360,6 +367,13 @@ void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
 
 void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup u = read_setup(scene);
+  check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
+    for (const Variant& v : u.variants) {
+      PeriodicBox box;
+      const HostParticles host = mixture_gas(u, v.soft_fraction, box);
+      System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
+    }
+  });
   if (!begin_outputs(opts)) return;
   // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
   // when every variant is done, so an interrupted run leaves nothing that looks finished.
