@@ -1,4 +1,4 @@
-// Exact solution of the linearized chain M u'' = K u (chain.md section 1) from the
+// Exact solution of the linearized chain M u'' = K u (docs/model_chains.md §1) from the
 // generalized symmetric eigenproblem (-K) s = w^2 M s with M-orthonormal modes. It is the
 // accuracy reference for time stepping.
 #pragma once

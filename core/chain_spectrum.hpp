@@ -1,4 +1,4 @@
-// Energy per wavenumber of batched chains (chain.md section 4) without any dense DFT
+// Energy per wavenumber of batched chains (docs/model_chains.md §4) without any dense DFT
 // matrix: the total-energy matrix TE_pq = 1/2 b_p v_p v_q - 1/2 F_p u_q is a sum of two
 // outer products, so the diagonal of F TE F^-1 is
 //   TE^(k) = (1/2L) [ DFT(b v)_k conj(DFT(v)_k) - DFT(F)_k conj(DFT(u)_k) ]

@@ -1,6 +1,6 @@
-// The micro-informed hypoelastic law of continuum.md: bulk and shear moduli as functions of
-// the solid volume fraction nu through the coordination number C*(nu) and the fabric trace
-// F_v, and the volume-fraction update from J = det F. Host code, no Kokkos.
+// The micro-informed hypoelastic law of docs/model_continuum.md: bulk and shear moduli as
+// functions of the solid volume fraction nu through the coordination number C*(nu) and the
+// fabric trace F_v, and the volume-fraction update from J = det F. Host code, no Kokkos.
 #pragma once
 #include <string>
 
@@ -15,7 +15,8 @@ struct ContinuumConstants {
   double G0 = 0, G1 = 0, G2 = 1;      // G = G0 + G1 (F_v - F_v0)^G2
   std::string units = "unspecified";  // unit system of K0, K1, G0, G1 (and of the stress)
 
-  // The spec's example constants (continuum.md), for the regression of its isotropic path.
+  // The spec's example constants (docs/model_continuum.md §2), for the regression of its
+  // isotropic path.
   static ContinuumConstants spec_example();
   // Throws InputError naming the first constant that makes the law meaningless.
   void check() const;

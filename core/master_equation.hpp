@@ -1,4 +1,4 @@
-// The master equation d e/dt = Q e for normalized band energies (chain.md section 5):
+// The master equation d e/dt = Q e for normalized band energies (docs/model_chains.md §5):
 // fitting the transfer matrix Q from ensemble-averaged standing-wave runs by the two
 // procedures of the spec, and its forward solution by the matrix exponential.
 #pragma once

@@ -1,4 +1,4 @@
-// Restitution-parameterised Hertz(-Mindlin) damping (dem.md section 10), host side.
+// Restitution-parameterised Hertz(-Mindlin) damping (docs/model_dem.md §10), host side.
 //
 // Normal force f = k_H delta^{3/2} + eta delta^{1/4} d(delta)/dt, k_H = (4/3) E* sqrt(R*),
 // eta = alpha sqrt(m* k_H). With delta = delta_0 x, t = tau s, delta_0 = v tau and

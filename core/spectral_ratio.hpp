@@ -2,8 +2,9 @@
 // A2(f) = A1(f) G exp(-pi f (t2 - t1)/Q) with a frequency-independent factor G (geometry,
 // coupling), so ln|A2/A1| = ln G + m f with slope m = -pi (t2 - t1)/Q. The slope is fitted by
 // least squares over a frequency band; Q = -pi (t2 - t1)/m and 1/Q with their standard errors.
-// (mixtures-and-waves.md writes ln|A1/A2| with the same slope formula; with t2 > t1 that
-// gives Q < 0 for an attenuating medium, so the ratio taken here is A2/A1.)
+// (The source writes ln|A1/A2| with the same slope formula, docs/model_mixtures_and_waves.md
+// §4; with t2 > t1 that gives Q < 0 for an attenuating medium, so the ratio taken here is
+// A2/A1.)
 #pragma once
 #include "core/spectrum.hpp"
 

@@ -1,4 +1,4 @@
-// Batched disordered granular chains (chain.md): the state of R realizations of an
+// Batched disordered granular chains (docs/model_chains.md): the state of R realizations of an
 // N-bead chain as Kokkos Views indexed (realization, bead), plus the per-realization
 // disorder drawn from a reproducible stream (seed, realization index).
 //
@@ -39,8 +39,9 @@ struct ChainSpec {
   StiffnessRule rule = StiffnessRule::Radius;
   DisorderTarget target = DisorderTarget::MassAndStiffness;
   double xi = 0.0;  // standard deviation of the mass distribution (mean 1)
-  // Draws at or below this are rejected (0: only non-positive masses, as in chain.md). A
-  // floor keeps near-weightless beads, whose frequency sqrt(k/b) diverges, out of the chain.
+  // Draws at or below this are rejected (0: only non-positive masses, as in
+  // docs/model_chains.md §2). A floor keeps near-weightless beads, whose frequency sqrt(k/b)
+  // diverges, out of the chain.
   double min_mass = 0.0;
   std::uint64_t seed = 1;
 
@@ -123,7 +124,7 @@ struct ChainBatch {
   }
 };
 
-// ---- initial conditions (chain.md section 3) -----------------------------------------
+// ---- initial conditions (docs/model_chains.md §3) -----------------------------------
 template <class Space>
 void chain_set_rest(ChainBatch<Space>& c) {
   Kokkos::deep_copy(c.u, 0.0);

@@ -1,4 +1,4 @@
-// Energies of batched chains (chain.md section 4): per-bead kinetic + linearized potential
+// Energies of batched chains (docs/model_chains.md §4): per-bead kinetic + linearized potential
 // energy, per-realization totals (linearized and exact Hertz), centre of energy R and
 // mean squared width r^2, ensemble averages, and the divergence guard. Every reduction
 // runs in a fixed order, so results do not depend on the thread count.

@@ -1,4 +1,4 @@
-// Hertz normal contact with damping set by a coefficient of restitution (dem.md section 10):
+// Hertz normal contact with damping set by a coefficient of restitution (docs/model_dem.md §10):
 //     f = k_H delta^{3/2} + eta delta^{1/4} d(delta)/dt,
 //     k_H = K sqrt(R*), K = (4/3) E*,  eta = alpha sqrt(m* k_H),
 // with R* the reduced radius (a_i for a wall) and m* the reduced mass (m_i for a wall).

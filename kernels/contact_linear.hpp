@@ -32,7 +32,7 @@ struct LinearNormal {
     return 0.5 * table(s.si, s.sj).kn * s.delta * s.delta;
   }
 
-  // Closed forms for a pair of species (0, 0) and reduced mass m (dem.md section 2).
+  // Closed forms for a pair of species (0, 0) and reduced mass m (docs/model_dem.md §2.1).
   double omega(double m, int si = 0, int sj = 0) const {
     const Params& q = table.p[si][sj];
     const double eta = q.gn / (2.0 * m);

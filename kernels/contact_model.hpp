@@ -39,10 +39,10 @@ struct ContactModel {
   Tangential tangential;
   Rolling rolling;
   // The normal force of the Coulomb limits (docs/contact_laws.md): false, |f_n| of the total
-  // force, elastic plus dashpot, as dem.md writes it (the default); true, the elastic part
-  // alone. They differ while a damped contact is tensile at its end: over a whole impact the
-  // dashpot's impulse vanishes, so with the elastic part gross sliding transfers exactly
-  // mu J_n, with the total force mu (J_n + 2 J_tensile).
+  // force, elastic plus dashpot, as docs/model_dem.md §3 writes it (the default); true, the
+  // elastic part alone. They differ while a damped contact is tensile at its end: over a whole
+  // impact the dashpot's impulse vanishes, so with the elastic part gross sliding transfers
+  // exactly mu J_n, with the total force mu (J_n + 2 J_tensile).
   bool coulomb_elastic_normal = false;
 
   // The normal force the Coulomb limits use (the total force fn, or its elastic part).

@@ -1,4 +1,4 @@
-// Multi-contact (non-binary) force laws for soft particles (spec: multicontact.md), layered
+// Multi-contact (non-binary) force laws for soft particles (docs/model_multicontact.md), layered
 // on the classical contact passes through their hooks:
 //   MC-strain: each contact's normal force uses its overlap plus the displacement that the
 //     other contacts of both particles cause there (forces of the previous step: explicit);

@@ -1,4 +1,4 @@
-// Strain-rate modes of the periodic box (dem.md section 5), as diagonal rate tensors for
+// Strain-rate modes of the periodic box (docs/model_dem.md §5), as diagonal rate tensors for
 // apply_affine_strain: isotropic, volume-conserving pure shear, uniaxial, general diagonal.
 // Strains are reported as true (logarithmic) strains ln(L / L_ref) per axis.
 #pragma once

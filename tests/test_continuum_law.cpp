@@ -162,7 +162,7 @@ double isotropic_kirchhoff_pressure(const ContinuumConstants& c, VolumeFractionU
   auto integrand = [&](double w) {
     const double eps = E * std::pow(w, 8);
     const double nu = volume_fraction(u, c.nu0, std::exp(3 * eps));
-    // K written out from continuum.md (no floor is active on this path).
+    // K written out from docs/model_continuum.md §2 (no floor is active on this path).
     const double C = c.C0 + c.C1 * std::pow(std::max(nu / c.nu0 - 1, 0.0), c.alpha);
     const double K = c.K0 + c.K1 * (C * c.g3 * nu - c.Fv0);
     return K * std::exp(2 * (E - eps)) * 8 * std::pow(w, 7);

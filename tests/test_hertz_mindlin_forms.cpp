@@ -1,5 +1,5 @@
-// Hertz normal and Mindlin tangential laws in both parameterisations of dem.md sections 2
-// and 3, evaluated on a pair held at a known overlap and compared with the formulas:
+// Hertz normal and Mindlin tangential laws in both parameterisations of docs/model_dem.md §2.2
+// and §3, evaluated on a pair held at a known overlap and compared with the formulas:
 //   normal, modulus form:    f = (4/3) E* sqrt(R) delta^{3/2},  1/E* = sum (1 - nu^2)/E
 //   normal, stiffness form:  f = k_H delta^{3/2},  k_H = (G_p/(1 - nu)) sqrt(dbar)
 //   tangential, modulus:     k_t = 8 G* sqrt(R delta),  1/G* = sum (2 - nu)/G

@@ -1,5 +1,5 @@
 // EMT and fluctuation theory against values worked out by hand from the formulas of
-// dem.md section 9 (phi = 0.64, Z = 6, D = 1.15, k_t/k_n = 0.8, chi from the closure).
+// docs/model_dem.md §9 (phi = 0.64, Z = 6, D = 1.15, k_t/k_n = 0.8, chi from the closure).
 #include <gtest/gtest.h>
 
 #include <cmath>

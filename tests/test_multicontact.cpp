@@ -1,4 +1,4 @@
-// Multi-contact force laws (MC-strain, MC-stress; spec multicontact.md): a particle with a
+// Multi-contact force laws (MC-strain, MC-stress; docs/model_multicontact.md): a particle with a
 // single contact is exactly classical Hertz under both, the MC-stress option that counts the
 // pair's own contact against its closed form, MC-strain's correction against the formula
 // evaluated by hand for contacts at 90 and 180 degrees (pair and wall contacts), momentum
@@ -21,7 +21,8 @@ using namespace granular;
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Rubber of the reference scenes (multicontact.md); a softer second species for mixtures.
+// Rubber of the reference scenes (docs/model_multicontact.md §5); a softer second species for
+// mixtures.
 constexpr double kE = 1.85e6, kNu = 0.46, kRho = 2000, kA = 0.01;
 constexpr double kE1 = 1.0e6, kNu1 = 0.3;
 constexpr int kWallSlot = 2;  // species slot of the walls' (rigid) material

@@ -1,4 +1,4 @@
-// Non-affine displacement fluctuation (dem.md section 7): for each contact, the relative
+// Non-affine displacement fluctuation (docs/model_dem.md §7): for each contact, the relative
 // displacement minus its affine part eps l, normalised by |eps l|. Checked on a chain of
 // contacts with a hand-made displacement field, and zero for an affine deformation.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Hertz damping set by a coefficient of restitution (dem.md section 10): the dimensionless
+// Hertz damping set by a coefficient of restitution (docs/model_dem.md §10): the dimensionless
 // collision x'' + alpha x^{1/4} x' + x^{3/2} = 0 and its inverse alpha(e); engine collisions
 // that rebound with the input e at every impact speed; the elastic limit against the Hertz
 // closed forms; two-material moduli with a rigid partner; and the Mindlin tangential spring

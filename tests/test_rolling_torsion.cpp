@@ -1,4 +1,4 @@
-// Rolling and torsion resistance (dem.md section 3) against closed forms.
+// Rolling and torsion resistance (docs/model_dem.md §3) against closed forms.
 // Law level: a pair held at fixed overlap with an imposed relative spin. The rolling
 // (torsion) displacement grows as a' w t, the torque on i is -k a'^2 w t until the Coulomb
 // cap a' mu f_n, then stays there; reversing the spin unloads along the same stiffness.

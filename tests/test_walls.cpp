@@ -144,7 +144,7 @@ TYPED_TEST(WallTest, GrossSlidingOnWallTransfersMuTimesOnePlusETimesNormalImpuls
   const auto r = impact<TypeParam>(model, s);
   ASSERT_TRUE(r.separated);
   const double vn = r.vn_in, e = std::exp(-eta * M_PI / omega);
-  ASSERT_GT(r.vc_in, 3.5 * mu * (1 + e) * vn);  // slides throughout (spec dem.md 10)
+  ASSERT_GT(r.vc_in, 3.5 * mu * (1 + e) * vn);  // slides throughout (docs/model_dem.md §10)
   ASSERT_GT(r.vc_out, 0.0);
   ASSERT_LT(r.max_overlap, 1e-3 * a);
   EXPECT_NEAR(r.restitution_normal, e, 1e-4);

@@ -1,7 +1,7 @@
 // Scene `chain_impulse`: an impulse v0 on the first (or centre) bead of disordered chains,
 // ensembles per disorder xi. Records the ensemble-mean energy profile <TE_p>(t), the centre
 // of energy <R(t)> and the squared width <r^2(t)>, the energy left on the source bead, and
-// the near-source decay of the localized energy (chain.md section 6). Every late-time
+// the near-source decay of the localized energy (docs/model_chains.md §6). Every late-time
 // quantity is taken before the fastest front (speed sqrt(3/2)) reaches the far end, so that
 // no reflection mixes in; the summary says where that analysis window ends.
 #include <Kokkos_Core.hpp>
@@ -124,7 +124,7 @@ std::vector<ImpulseBlock> impulse_verlet(const ChainScene& cs, const BlockRange&
   return blocks;
 }
 
-// The linearized chain solved exactly (chain.md section 1): each realization's eigenmodes,
+// The linearized chain solved exactly (docs/model_chains.md §1): each realization's eigenmodes,
 // then the state at every sample time in closed form, so neither a time step nor a mass
 // floor limits it. Realizations go in batches of a fixed size, each batch's modes computed
 // in parallel, and the sums are taken in realization order: the result does not depend on

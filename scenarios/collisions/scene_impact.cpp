@@ -183,7 +183,7 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
                                c.snapshot_every);
       const ImpactResult r = run_case(model, c, v, a, true, estar, rstar, mstar, &snapshots);
       const double vn = r.vn_in, e = r.restitution_normal;
-      // Gross sliding of a solid sphere on a wall (dem.md section 10): it slides for the
+      // Gross sliding of a solid sphere on a wall (docs/model_dem.md §10): it slides for the
       // whole impact when |v_c| > (7/2) mu (1 + e) v_n; the tangential impulse is then
       // mu (1 + e) m v_n against the slip. For a pair the threshold involves both spheres'
       // inertia, so only the measured impulse ratio is reported.

@@ -1,6 +1,6 @@
 // Effective medium theory (affine) and fluctuation theory (pair fluctuations, first and
 // second ring) for the bulk and shear moduli of isotropic polydisperse sphere packings,
-// dem.md section 9. Moduli are dimensionless: K* = K dbar / k_n, G* = G dbar / k_n.
+// docs/model_dem.md §9. Moduli are dimensionless: K* = K dbar / k_n, G* = G dbar / k_n.
 #pragma once
 
 namespace granular {

@@ -1,9 +1,9 @@
-// Scene `confined_compression`: soft polydisperse balls in a rigid box, compressed along z
-// by the top wall and decompressed (multicontact.md). Preparation: random insertion into a
-// tall region, settling under gravity with background damping, the top wall closed at the
-// box height. Then, from that one state, one run per force model (classical Hertz,
-// MC-strain, MC-stress): force on the top wall against strain, the largest force and the
-// wall-clock cost of each model on the same run.
+// Scene `confined_compression`: soft polydisperse balls in a rigid box, compressed along z by the
+// top wall and decompressed (docs/model_multicontact.md §5). Preparation: random insertion into a
+// tall region, settling under gravity with background damping, the top wall closed at the box
+// height. Then, from that one state, one run per force model (classical Hertz, MC-strain,
+// MC-stress): force on the top wall against strain, the largest force and the wall-clock cost of
+// each model on the same run.
 #include <Kokkos_Core.hpp>
 #include <chrono>
 #include <cmath>

@@ -1,5 +1,6 @@
 // The force models of the soft-particle scenes: classical Hertz, MC-strain with a list of
-// prefactors gamma and MC-stress with a list of prefactors beta (multicontact.md), read from
+// prefactors gamma and MC-stress with a list of prefactors beta
+// (docs/model_multicontact.md §2-4), read from
 //   [multicontact]  classical = true   strain_gamma = [1.0, 1.12]   stress_beta = [1.0, 1.65]
 //                   own_contact = false   mean = false   walls = true
 // The three options are the choices the source leaves open; their values go to summary.json

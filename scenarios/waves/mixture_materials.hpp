@@ -1,4 +1,4 @@
-// Materials of the mixture study (mixtures-and-waves.md §1, DEM parameter set) and the
+// Materials of the mixture study (docs/model_mixtures_and_waves.md §1, DEM parameter set) and the
 // contact model built from them for every pair of species:
 //
 //   [materials.glass]  shear_modulus = 29000 (or young_modulus)   poisson = 0.3
@@ -8,7 +8,7 @@
 //
 // Normal force: Hertz with E* mixing, f = (4/3) E* sqrt(R delta) delta + damping, with
 // 1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j and R = a_i a_j/(a_i + a_j), whatever the pair
-// rule (dem.md §4: "Hertz pairs use E* and R"). Damping: the mixtures chapter writes
+// rule (docs/model_dem.md §4: "Hertz pairs use E* and R"). Damping: the mixtures chapter writes
 // gamma sqrt(d delta) d(delta)/dt with d the pair diameter a_i + a_j; the engine's Hertz law
 // scales both terms with sqrt(R delta), and d = 4 R for equal spheres, so the coefficient
 // of that law is 2 gamma (exact for equal sizes; within 0.1 % for a +-5 % size spread).

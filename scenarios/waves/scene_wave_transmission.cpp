@@ -1,11 +1,11 @@
-// Scene `wave_transmission`: virtual transducers (mixtures-and-waves.md §2). A packing of one
-// or more species between two frictionless walls along x, periodic in y and z, is brought by
-// a servo on the source wall to each wall stress sigma_xx of a list (loading branch) and
-// relaxed. From each relaxed state: a short velocity pulse of the source wall, recorded as
-// the receiver wall's force and the mean x-velocity of particle slabs (pickers -> V_p,
-// M = rho V_p^2, spectra, spectral-ratio Q between two slabs), repeated at other amplitudes
-// (linearity check) and time steps; and a quasi-static uniaxial probe by the source wall,
-// whose stress increment gives M directly for the same packing and boundary conditions.
+// Scene `wave_transmission`: virtual transducers (docs/model_mixtures_and_waves.md §3). A packing
+// of one or more species between two frictionless walls along x, periodic in y and z, is brought by
+// a servo on the source wall to each wall stress sigma_xx of a list (loading branch) and relaxed.
+// From each relaxed state: a short velocity pulse of the source wall, recorded as the receiver
+// wall's force and the mean x-velocity of particle slabs (pickers -> V_p, M = rho V_p^2, spectra,
+// spectral-ratio Q between two slabs), repeated at other amplitudes (linearity check) and time
+// steps; and a quasi-static uniaxial probe by the source wall, whose stress increment gives M
+// directly for the same packing and boundary conditions.
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <chrono>
@@ -506,8 +506,8 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     write_signal(h5, g + "/receiver", ref.force, pout, sf);
     row["receiver_spectrum"] = spectrum_json(sf);
     {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
-       // its first peak, mirrored to a full period (mixtures-and-waves.md), has a dominant
-       // frequency of its own: the receiver's rise time as a frequency.
+       // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
+       // dominant frequency of its own: the receiver's rise time as a frequency.
       SignalSettings mirrored = w.signals;
       mirrored.spectrum.window = EventWindow::Mirrored;
       const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);

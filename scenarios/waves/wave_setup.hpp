@@ -1,4 +1,4 @@
-// Scene keys of `wave_transmission` (virtual transducers, mixtures-and-waves.md §2).
+// Scene keys of `wave_transmission` (virtual transducers, docs/model_mixtures_and_waves.md §3).
 //
 //   [materials.<name>]  Hertz-Mindlin materials (materials.hpp); [contact] pair_rule etc.
 //   [mixture]     materials = "glass, rubber"   volume_fractions = [0.9, 0.1]
