@@ -147,7 +147,12 @@ int main(int argc, char** argv) {
                    "chain_master_equation, elastic_moduli, mixture_moduli)\n";
     }
   } catch (const granular::InputError& e) {
-    granular::ensemble::say(granular::ensemble::prefix() + "error: " + e.what());
+    // Every refusal names the scene file: those raised below the drivers (a file the scene
+    // names, a derived quantity) may not know it.
+    const std::string what = e.what();
+    const bool named = what.find(scene_path) != std::string::npos;
+    granular::ensemble::say(granular::ensemble::prefix() +
+                            "error: " + (named ? what : "scene file " + scene_path + ": " + what));
     rc = 2;
   } catch (const granular::PhysicsError& e) {
     granular::ensemble::say(granular::ensemble::prefix() + "stopped: " + e.what());

@@ -81,12 +81,29 @@ bool begin_outputs(const RunOptions& opts) {
   // A run's outputs never sit beside an earlier run's: the earlier summary, report and
   // results go before anything new is written, so a run that stops or fails part-way leaves
   // no summary (nothing that looks finished) and no report of another run.
+  // final_state.xdmf names datasets of results.h5: it goes first, so that a kill between the
+  // two never leaves it pointing at a removed file.
   if (ensemble::root())
-    for (const char* name : {"summary.json", "report.html", "results.h5"}) {
+    for (const char* name : {"summary.json", "report.html", "final_state.xdmf", "results.h5"}) {
       std::error_code ec;
       std::filesystem::remove(opts.out_dir + "/" + name, ec);
     }
   return true;
+}
+
+void require_checkpoint_to_resume(const RunOptions& opts, const std::string& checkpoint) {
+  if (!opts.resume || opts.check_only) return;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const bool there =
+      fs::is_directory(checkpoint, ec) ? !fs::is_empty(checkpoint, ec) : fs::exists(checkpoint, ec);
+  if (there) return;
+  throw InputError("--resume: no checkpoint at " + checkpoint +
+                   (fs::exists(opts.out_dir + "/summary.json", ec)
+                        ? ": the run in " + opts.out_dir +
+                              " has finished (its outputs are left as they are); run without "
+                              "--resume to run it again"
+                        : ": nothing was checkpointed there; run without --resume"));
 }
 
 }  // namespace granular

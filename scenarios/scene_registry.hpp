@@ -43,6 +43,11 @@ const SceneEntry& find_scene(const SceneFile& scene);
 // returns false and the driver returns.
 bool begin_outputs(const RunOptions& opts);
 
+// With --resume, before begin_outputs: refuses ("--resume: no checkpoint at ...") when
+// `checkpoint` (a file, or a folder of checkpoints) is missing or empty, so that a resume
+// with nothing to continue leaves the folder as it was (a finished run's outputs included).
+void require_checkpoint_to_resume(const RunOptions& opts, const std::string& checkpoint);
+
 // In check mode, builds the run's first system with `build()` so that the run's guards (the
 // time step against the stiffest contact, the dashpots) apply to `granular check` too; a
 // guard's refusal is reported as an input error naming the scene file. Nothing in run mode.

@@ -1,6 +1,6 @@
 // Scene `chain_master_equation`: standing waves agitating one band each, ensembles per
 // disorder xi; the ensemble-averaged normalized band energies give the transfer matrix Q
-// of the master equation by the spec's two fitting procedures (chain.md section 5) and by a
+// of the master equation by the spec's two fitting procedures (docs/model_chains.md §5) and by a
 // global constrained fit over the whole horizon, with and without a trapped fraction per
 // band (weak localization). Each procedure is also fitted on one half of the ensemble and
 // judged on the other half; a two-tone run outside the fitting data checks the forward
@@ -140,12 +140,13 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   scene.require(placement == "centre" || placement == "upper_edge", "bands.tone_placement",
                 "must be \"centre\" or \"upper_edge\"");
   const double u0 = scene.real("wave.u0", 0.01);
-  const long samples = scene.integer("time.samples");
+  const long samples = scene.small_integer("time.samples");
   const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
   const auto w2 = scene.reals("fit.window_linear", {2, 8});
   const auto w3 = scene.reals("fit.window_global", {0, static_cast<double>(samples)});
   const auto check_bands = scene.reals("validation.bands");
-  const long check_samples = scene.integer("validation.samples", 2 * samples);
+  const long check_samples = scene.small_integer(
+      "validation.samples", static_cast<int>(std::min<long>(2 * samples, 2147483647)));
   scene.require(!cs.exact, "time.solver",
                 "must be \"verlet\" here (the exact solver serves chain_impulse)");
   const int L = cs.spec.sites();

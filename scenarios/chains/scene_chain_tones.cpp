@@ -1,5 +1,5 @@
 // Scene `chain_tones`: standing-wave tones on disordered chains, looked at the ways the source
-// study shows them (chain.md sections 3-5): space-time maps of one realization's
+// study shows them (docs/model_chains.md §3-5): space-time maps of one realization's
 // displacement u_p(t), bead energy TE_p(t) and spectral energy TE^(k)(t); band-energy curves
 // of one realization against the ensemble, of the agitated band against the disorder and of
 // several bands at one disorder; what each master-equation fitting procedure sees (decay of
@@ -146,6 +146,7 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
       tones.push_back(static_cast<int>(t));
   }
   scene.require(!amplitudes.empty(), "wave.u0", "must list at least one amplitude");
+  scene.require_distinct("wave.u0", amplitudes);
   for (double a : amplitudes)
     scene.require(a > 0 && a < 0.1, "wave.u0", "must be in (0, 0.1): small against the overlap");
   scene.require(mapped >= 0 && mapped < cs.realizations, "maps.realization",

@@ -1,5 +1,5 @@
 // Scene `two_particle_linear`: head-on collisions over impact speeds and mass ratios,
-// measured contact duration and restitution next to the closed forms of dem.md section 2.
+// measured contact duration and restitution next to the closed forms of docs/model_dem.md §2.1.
 #include <Kokkos_Core.hpp>
 #include <cmath>
 #include <iostream>
@@ -25,8 +25,16 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   scene.require(d1 > 0, "particles.diameter", "must be positive");
   for (double d : partners) scene.require(d > 0, "particles.partner_diameters", "must be positive");
   for (double v : speeds) scene.require(v > 0, "collisions.impact_speeds", "must be positive");
-  scene.require(resolution >= 10, "collisions.steps_per_contact", "must be at least 10");
+  scene.require(resolution >= 10 && resolution <= 10000000, "collisions.steps_per_contact",
+                "must lie in [10, 1e7] (every step of a collision is recorded)");
   scene.reject_unknown_keys();
+  for (double d2 : partners) {  // an overdamped pair never separates: no contact duration
+    const double m1 = density * M_PI / 6 * d1 * d1 * d1, m2 = density * M_PI / 6 * d2 * d2 * d2;
+    const double tc = normal.contact_duration(m1 * m2 / (m1 + m2));
+    scene.require(std::isfinite(tc) && tc > 0, "contact.gamma_n",
+                  "overdamps the pair of diameters " + std::to_string(d1) + " and " +
+                      std::to_string(d2) + ": lower it, or raise particles.density");
+  }
 
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");

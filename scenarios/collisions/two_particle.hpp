@@ -4,8 +4,10 @@
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <cmath>
+#include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 
@@ -153,6 +155,10 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   r.ekin_before = ekin();
   sample(delta, vrel, p, e0);
   r.momentum_before = p;
+  if (!std::isfinite(e0) || !std::isfinite(delta))
+    throw PhysicsError(
+        "collision: the kinetic energy before contact is not finite: lower the "
+        "impact speed");
   const double v_in = vrel;
   double t_start = -1, t_end = -1, prev_delta = delta;
   // Generous bound on the collision length: 100 undamped half periods at the guard stiffness.
@@ -169,6 +175,9 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
     }
     sys.step(1);
     sample(delta, vrel, p, e);
+    if (!std::isfinite(delta) || !std::isfinite(e))
+      throw PhysicsError("collision: the state became non-finite at step " + std::to_string(k) +
+                         ": lower the impact speed or raise the steps per contact");
     if (s.record) {
       Kokkos::deep_copy(wh, sys.particles().w);
       for (int i = 0; i < 2; ++i)

@@ -8,9 +8,12 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <sstream>
+#include <string>
 #include <type_traits>
 #include <vector>
 
+#include "core/error.hpp"
 #include "kernels/dem_system.hpp"
 
 namespace granular {
@@ -32,6 +35,13 @@ long strain_to_phi(System& sys, double target, double rate, long every,
     if (compress ? phi >= target : phi <= target) break;
     // Steps left to the target at this rate, capped by the sampling interval.
     const double left = std::log(phi / target) / (3.0 * std::log1p(rate * sys.params().dt));
+    // A rate too small for the time step (the strain of a step rounds away) would never end.
+    if (!(left < 1e10)) {
+      std::ostringstream why;
+      why << "reaching the volume fraction " << target << " at the strain rate " << rate
+          << " would take " << left << " steps: raise the strain rate";
+      throw PhysicsError(why.str());
+    }
     const long n = std::max(1L, std::min(every, static_cast<long>(std::ceil(left))));
     sys.step(n);
     steps += n;

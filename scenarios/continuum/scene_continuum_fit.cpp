@@ -1,4 +1,4 @@
-// Scene `continuum_fit`: the continuum law of continuum.md fitted to the engine's own
+// Scene `continuum_fit`: the continuum law of docs/model_continuum.md fitted to the engine's own
 // elastic-moduli studies and checked against DEM paths, in one run:
 //   parse -> spec example (regression of the source's isotropic path) -> fit each study and
 //   preparation friction -> isotropic validation on the preparation path -> DEM pure shear
@@ -49,12 +49,16 @@ Setup read_setup(const SceneFile& scene) {
   s.step = scene.real("law.step");
   scene.require(s.step > 0 && s.step < 0.01, "law.step", "must lie in (0, 0.01)");
   s.z_min = scene.real("fit.z_min", 4.0);
+  scene.require(s.z_min >= 0 && s.z_min < 12, "fit.z_min",
+                "must lie in [0, 12): a contact number the packings reach");
   for (const std::string& name : scene.tables("data"))
     s.data.push_back({name, scene.input_path("data." + name + ".study", true)});
   scene.require(!s.data.empty(), "data", "needs at least one [data.<name>] table with a study");
   s.example_step = scene.real("example.step", -1e-4);
   s.example_nu_end = scene.real("example.nu_end", 0.82);
   scene.require(s.example_step < 0, "example.step", "must be negative (compression)");
+  scene.require(s.example_nu_end > 0 && s.example_nu_end < 1, "example.nu_end",
+                "must lie in (0, 1)");
   s.history_file = scene.optional_input_path("history.file");
   if (!s.history_file.empty()) {
     s.history_data = scene.text("history.data");
@@ -88,6 +92,8 @@ Setup read_setup(const SceneFile& scene) {
     d.damping_background = scene.real("shear.damping_background");
     d.damping_rotational = scene.real("shear.damping_rotational");
     d.dt = scene.real("shear.dt"), d.skin = scene.real("shear.skin");
+    scene.require(d.dt > 0, "shear.dt", "must be positive");
+    scene.require(d.skin > 0, "shear.skin", "must be positive");
     d.max_overlap = scene.real("shear.max_overlap", 0.5);
     d.phi = scene.real("shear.phi");
     d.volumetric_strain_rate = scene.real("shear.volumetric_strain_rate");

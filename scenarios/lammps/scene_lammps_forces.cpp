@@ -86,7 +86,8 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   const double dt = scene.real("lammps.timestep");
   scene.require(dt > 0, "lammps.timestep", "must be positive");
   const long steps = scene.integer("run.steps", 0);
-  scene.require(steps >= 0, "run.steps", "must not be negative");
+  scene.require(steps >= 0 && steps <= 1000000, "run.steps",
+                "must lie in [0, 1e6]: this scene compares forces over a few steps");
   const long every = scene.integer("run.output_every", 0);
   scene.require(every >= 0, "run.output_every", "must not be negative (0: first and last step)");
   LammpsData data;
@@ -124,10 +125,19 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
       std::cerr << "lammps_forces: step " << ff.steps_done << " of " << steps << ", " << ff.contacts
                 << " contacts\n";
   };
+  // A refusal during the steps comes from where the atoms went: the time step moved them.
+  auto stepped = [&](auto&& work) {
+    try {
+      work();
+    } catch (const InputError& e) {
+      throw PhysicsError(std::string(e.what()) + " at step " + std::to_string(ff.steps_done) +
+                         ": lower lammps.timestep (" + scene.path() + ")");
+    }
+  };
   ff.compute(false);  // LAMMPS' setup: forces of the initial state, history not advanced
   record();
   for (long s = 1; s <= steps; ++s) {
-    ff.step();
+    stepped([&] { ff.step(); });
     if (s == steps || (every > 0 && s % every == 0)) record();
   }
   h5.attribute("/", "atoms", static_cast<double>(ff.size()));

@@ -112,8 +112,26 @@ std::string parameter_fingerprint(const std::string& text) {
 }
 }  // namespace
 
+std::string study_checkpoints(const std::string& out_dir) { return out_dir + "/variants"; }
+
+namespace {
+std::string removal_name(const std::string& parts) {
+  const std::filesystem::path p(parts);
+  return (p.parent_path() / ("." + p.filename().string() + ".removing")).string();
+}
+}  // namespace
+
+void remove_study_checkpoints(const std::string& parts) {
+  if (!ensemble::root() || !std::filesystem::exists(parts)) return;
+  const std::string gone = removal_name(parts);
+  std::filesystem::remove_all(gone);
+  std::filesystem::rename(parts, gone);
+  std::filesystem::remove_all(gone);
+}
+
 std::string open_study_checkpoints(const std::string& out_dir, bool resume) {
-  const std::string parts = out_dir + "/variants";
+  const std::string parts = study_checkpoints(out_dir);
+  if (ensemble::root()) std::filesystem::remove_all(removal_name(parts));  // a killed removal
   // Rank 0 alone judges the folder: on a shared file system another rank may already be
   // writing its first stage checkpoint there when a slower one gets here.
   if (ensemble::root() && !resume && std::filesystem::exists(parts) &&

@@ -60,6 +60,14 @@ std::string moduli_parameters_fingerprint(const std::map<std::string, std::strin
 // holds checkpoints of an unfinished study is refused, saying how to continue or restart.
 std::string open_study_checkpoints(const std::string& out_dir, bool resume);
 
+// <out_dir>/variants: where a study's checkpoints live (require_checkpoint_to_resume).
+std::string study_checkpoints(const std::string& out_dir);
+
+// Removes a finished study's checkpoint folder as one step: renamed out of the way first
+// (a kill during the removal then leaves no half-emptied folder that --resume would read,
+// only a hidden one the next run clears), then deleted.
+void remove_study_checkpoints(const std::string& parts);
+
 // <dir>/<name>.h5 holds the datasets, <dir>/<name>.index (written last) lists them with the
 // fingerprint: a variant counts as finished only when its index exists.
 void save_moduli_part(const std::string& dir, const std::string& name,

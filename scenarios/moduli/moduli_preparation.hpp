@@ -1,4 +1,4 @@
-// The elastic_moduli preparation protocol (dem.md section 6) for one variant, cut into
+// The elastic_moduli preparation protocol (docs/model_dem.md §6) for one variant, cut into
 // stages that are checkpointed exactly, so that a study can stop at any stage and resume
 // bit for bit.
 #pragma once
@@ -8,6 +8,7 @@
 
 #include "core/progress.hpp"
 #include "scenarios/common/run_report.hpp"
+#include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_probing.hpp"
 
 namespace granular::moduli_study {
@@ -224,9 +225,13 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
     ck.remove(k - 1);
     if (stop()) return false;
   }
+  // The finished variant is checkpointed first, then its stage pointer goes, then the stage
+  // files: a kill between any two leaves either a finished variant or a pointer whose stage
+  // is whole, never a pointer to removed files.
+  save_moduli_part(ck.dir, ck.name, ck.fingerprint, out);
+  std::filesystem::remove(ck.pointer());
   for (long k = 0; k < static_cast<long>(stages.size()); ++k) ck.remove(k);
   ck.remove(resumed);
-  std::filesystem::remove(ck.pointer());
   return true;
 }
 

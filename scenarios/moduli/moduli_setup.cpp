@@ -14,6 +14,7 @@ Setup read_setup(const SceneFile& scene) {
   s.start_from = scene.optional_input_path("start.from");
   s.contact = ContactConfig::read(scene);
   s.params.dt = scene.real("run.dt");
+  scene.require(s.params.dt > 0, "run.dt", "must be positive");
   s.params.dt_key = "run.dt";
   s.params.skin = scene.real("run.skin");
   s.params.damping.translational = scene.real("damping.background", 0.0);

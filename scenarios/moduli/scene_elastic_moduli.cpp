@@ -1,4 +1,4 @@
-// Scene `elastic_moduli`: the preparation protocol of dem.md section 6 (gas -> compress to
+// Scene `elastic_moduli`: the preparation protocol of docs/model_dem.md §6 (gas -> compress to
 // phi_0 -> relax -> compress to phi_max -> decompress), configurations saved on the chosen
 // branch at the listed volume fractions, relaxed and written as restartable HDF5 files
 // (configs/), then elastic probing of each (sliding switched off unless the scene keeps
@@ -74,6 +74,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       }
     });
   });
+  if (s.start_from.empty()) require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
   if (!begin_outputs(opts)) return;
   Json summary = Json::object();
   summary["scene"] = "elastic_moduli";
@@ -193,8 +194,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         stopped = true;
         return;
       }
-      save_moduli_part(parts, part_name, fingerprint, part);
-      if (!spread) out.append(part);
+      if (!spread) out.append(part);  // prepare() saved it as the variant's checkpoint
     }
   });
 
@@ -296,7 +296,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     summary["size_scatter"] = sc;
   }
   write_summary(opts.out_dir + "/summary.json", summary, {"table"});
-  std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
+  remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -92,6 +92,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
   DemParams params;
   params.dt = scene.real("run.dt");
+  scene.require(params.dt > 0, "run.dt", "must be positive");
   params.dt_key = "run.dt";
   params.skin = scene.real("run.skin");
   params.damping.translational = scene.real("damping.background", 0.0);
@@ -121,8 +122,9 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     System(Particles<Exec>::from_host(random_gas(gas, first_box)), first_box, model, params);
   });
 
-  if (!begin_outputs(opts)) return;
   const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
+  require_checkpoint_to_resume(opts, checkpoint);
+  if (!begin_outputs(opts)) return;
   const double d_mean = 0.5 * (gas.diameter_min + gas.diameter_max);
 
   PeriodicBox box;
@@ -131,8 +133,6 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   double t0 = 0;
   long step0 = 0;
   if (opts.resume) {
-    if (!std::filesystem::exists(checkpoint))
-      throw InputError("--resume: no checkpoint at " + checkpoint);
     H5Reader in(checkpoint);
     double density = 0;
     host = read_state(in, "/state", box, density);

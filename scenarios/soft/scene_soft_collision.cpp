@@ -1,8 +1,8 @@
-// Scene `soft_collision`: the multi-contact reference collisions (multicontact.md). Three
-// soft spheres in a row, the outer two launched at the centre one; five spheres (two more
-// along y, launched the same way). For each material and each force model (classical
-// Hertz, MC-strain, MC-stress): kinetic energy and the centre particle's overlap against
-// time. A sphere pressed from several sides at once is where the models differ.
+// Scene `soft_collision`: the multi-contact reference collisions (docs/model_multicontact.md §5).
+// Three soft spheres in a row, the outer two launched at the centre one; five spheres (two more
+// along y, launched the same way). For each material and each force model (classical Hertz,
+// MC-strain, MC-stress): kinetic energy and the centre particle's overlap against time. A sphere
+// pressed from several sides at once is where the models differ.
 #include <Kokkos_Core.hpp>
 #include <chrono>
 #include <cmath>
@@ -87,6 +87,7 @@ Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, i
 void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
   const MaterialSet mats = MaterialSet::read(scene);
   const auto dts = scene.reals("soft.time_steps");
+  for (double d : dts) scene.require(d > 0, "soft.time_steps", "must all be positive");
   scene.require(dts.size() == mats.materials.size(), "soft.time_steps",
                 "needs one time step per material of [materials] (sorted by name)");
   const double a = 0.5 * scene.real("soft.diameter");

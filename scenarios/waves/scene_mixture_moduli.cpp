@@ -1,7 +1,7 @@
 // Scene `mixture_moduli`: elastic moduli of glass-rubber (stiff-soft) mixtures against the
-// rubber volume fraction and the confining pressure (mixtures-and-waves.md §2, "M(P, nu_r)
-// tables"). Per mixture: a random gas in a periodic box, compressed to jamming, then driven
-// by an isotropic pressure servo through the listed pressures in ascending order (one
+// rubber volume fraction and the confining pressure (docs/model_mixtures_and_waves.md §2,
+// "M(P, nu_r) tables"). Per mixture: a random gas in a periodic box, compressed to jamming,
+// then driven by an isotropic pressure servo through the listed pressures in ascending order (one
 // sample, loading branch); at each pressure the relaxed state is probed like the element
 // tests of `elastic_moduli` (K from isotropic, G from pure-shear, M from uniaxial strain,
 // sliding switched off), next to K + 4G/3, the packing's bulk density and V_p = sqrt(M/rho).
@@ -367,6 +367,7 @@ void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
 
 void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   const Setup u = read_setup(scene);
+  require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
   check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
     for (const Variant& v : u.variants) {
       PeriodicBox box;
@@ -572,7 +573,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   summary["M_over_K_plus_4G_3_range"] =  // null when no configuration jammed
       lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
   write_summary(opts.out_dir + "/summary.json", summary, {"table"});
-  std::filesystem::remove_all(parts);  // everything is in results.h5 and summary.json now
+  remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("mixture_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
