@@ -70,7 +70,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   theory->add_option("--chi", tin.chi, "contact-number fluctuation (default: closure 1/(phi Z))");
   theory->add_option("--kt-kn", tin.kt_kn, "tangential over normal stiffness (default 0)");
-  theory->add_option("--D", tin.D, "size moment <d^2>/<d^3> x dbar (default 1.15)");
+  theory->add_option("--D", tin.D,
+                     "size moment <d^2>/<d^3> x dbar (default 26/30 = 0.867: d uniform in [1, 3])");
 
   CLI11_PARSE(app, argc, argv);
   if (show_version) {

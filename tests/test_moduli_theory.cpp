@@ -37,9 +37,16 @@ TEST(ModuliTheory, EffectiveMediumAndFluctuationTheoryMatchHandValues) {
 
 TEST(ModuliTheory, MeasuredChiReplacesClosure) {
   TheoryInput in;
-  in.phi = 0.7, in.z = 7, in.chi = 0.1;
+  in.phi = 0.7, in.z = 7, in.chi = 0.1, in.D = 1.15;
   const auto r = moduli_theory(in);
   EXPECT_DOUBLE_EQ(r.chi, 0.1);
   EXPECT_NEAR(r.rho, (22 - 21.0) / 24 * (1.0 / 7 - 1.0 / 49) + 0.1 / 8, 1e-14);
   EXPECT_DOUBLE_EQ(r.G_emt, 0.7 * 7 * 1.15 / (5 * M_PI));  // k_t = 0
+}
+
+// The default size moment is the formula's own value for the shipped size range (d uniform in
+// [1, 3]): dbar <d^2>/<d^3> = 2 (13/3) / 10, not the reciprocal 1.15 the source quotes.
+TEST(ModuliTheory, DefaultSizeMomentIsTheFormulasValueForDiametersUniformFromOneToThree) {
+  const double mean = 2.0, second = (27.0 - 1.0) / (3 * 2.0), third = (81.0 - 1.0) / (4 * 2.0);
+  EXPECT_NEAR(TheoryInput{}.D, mean * second / third, 1e-15);
 }

@@ -10,7 +10,10 @@ struct TheoryInput {
   double z = 0;      // corrected coordination number Z (non-rattlers)
   double chi = -1;   // contact-number fluctuation; < 0: use the closure chi = 1/(phi Z)
   double kt_kn = 0;  // tangential over normal stiffness
-  double D = 1.15;   // size moment <d^2>/<d^3> scaled by dbar (1.15 for w = 3, uniform)
+  // Size moment dbar <d^2>/<d^3>: 26/30 for d uniform in [1, 3] (w = 3). The source quotes
+  // 1.15 for that set, its reciprocal <d^3>/(dbar <d^2>) (docs/model_dem.md §7); the studies
+  // compute D from each configuration.
+  double D = 26.0 / 30.0;
 };
 
 struct TheoryResult {
