@@ -48,18 +48,10 @@ struct HystereticNormal {
 
   double damping_rate(double m, double = 0, double = 0,
                       const PairMask& pairs = PairMask::all()) const {
-    double g = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        if (pairs(a, b)) g = std::max(g, table.p[a][b].gn);
-    return g / m;
+    return max_over(table, pairs, [](const Params& q) { return q.gn; }) / m;
   }
   double stiffness(double = 0, double = 0, const PairMask& pairs = PairMask::all()) const {
-    double k = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        if (pairs(a, b)) k = std::max({k, table.p[a][b].k2, table.p[a][b].kc});
-    return k;
+    return max_over(table, pairs, [](const Params& q) { return std::max(q.k2, q.kc); });
   }
   double shortest_duration(double m, double = 0, double = 0,
                            const PairMask& pairs = PairMask::all()) const {

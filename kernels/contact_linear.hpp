@@ -62,19 +62,11 @@ struct LinearNormal {
   // The dashpot's largest rate gamma / m on mass m (an explicit step needs it below 1/dt).
   double damping_rate(double m, double = 0, double = 0,
                       const PairMask& pairs = PairMask::all()) const {
-    double g = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        if (pairs(a, b)) g = std::max(g, table.p[a][b].gn);
-    return g / m;
+    return max_over(table, pairs, [](const Params& q) { return q.gn; }) / m;
   }
   double stiffness(double /*delta_ref*/ = 0, double /*length_max*/ = 0,
                    const PairMask& pairs = PairMask::all()) const {
-    double k = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        if (pairs(a, b)) k = std::max(k, table.p[a][b].kn);
-    return k;
+    return max_over(table, pairs, [](const Params& q) { return q.kn; });
   }
 };
 

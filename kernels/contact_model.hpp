@@ -106,6 +106,14 @@ struct ContactModel {
       const double kt = tangential.stiffness(delta_ref, length_max, pairs);
       if (kt > 0) t = std::min(t, M_PI * std::sqrt(2.0 / 7.0 * m / kt));
     }
+    if constexpr (Rolling::active) {
+      // Relative rotation against the rolling or torsion spring: with I = (2/5) m a^2 and the
+      // lever a' below either radius, its angular frequency^2 a'^2 k (1/I_i + 1/I_j) stays
+      // below (5/2) k / m, so pi sqrt((2/5) m / k) bounds its half period from below.
+      const double kr =
+          max_over(rolling.table, pairs, [](const auto& q) { return std::max(q.kr, q.ko); });
+      if (kr > 0) t = std::min(t, M_PI * std::sqrt(0.4 * m / kr));
+    }
     return t;
   }
   // The fastest dashpot rate gamma / m of the contact (normal and tangential).
@@ -114,6 +122,10 @@ struct ContactModel {
     double r = normal.damping_rate(m, delta_ref, length_max, pairs);
     if constexpr (Tangential::active)
       r = std::max(r, tangential.damping_rate(m, delta_ref, length_max, pairs));
+    if constexpr (Rolling::active)  // the same bound: gamma a'^2 / I_eff below (5/2) gamma / m
+      r = std::max(r, 2.5 / m * max_over(rolling.table, pairs, [](const auto& q) {
+                        return std::max(q.gr, q.go);
+                      }));
     return r;
   }
 };

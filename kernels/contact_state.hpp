@@ -4,6 +4,7 @@
 // walk both entries of the full list) gives exactly opposite vectors.
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 
 namespace granular {
 
@@ -43,6 +44,17 @@ struct PairMask {
     return m;
   }
 };
+
+// The largest of f(parameters) over the pairs of a mask (0 when none): the time-step guard's
+// stiffest contact and fastest dashpot, for every law from the same loop.
+template <class P, class F>
+double max_over(const PairTable<P>& table, const PairMask& pairs, F&& f) {
+  double r = 0;
+  for (int a = 0; a < kMaxSpecies; ++a)
+    for (int b = 0; b < kMaxSpecies; ++b)
+      if (pairs(a, b)) r = std::max(r, static_cast<double>(f(table.p[a][b])));
+  return r;
+}
 
 struct PairState {
   double n[3];       // unit normal, from j towards i

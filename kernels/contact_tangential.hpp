@@ -82,27 +82,17 @@ struct CoulombTangential {
   double damping_rate(double m, double delta_ref, double length_max,
                       const PairMask& pairs = PairMask::all()) const {
     const double mt = 2.0 / 7.0 * m;
-    double r = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b) {
-        if (!pairs(a, b)) continue;
-        const Params& q = table.p[a][b];
-        const double c = q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref);
-        const double g = q.law == MindlinRestitution ? q.gt * std::sqrt(m * q.kt * c) : q.gt * c;
-        r = std::max(r, g / mt);
-      }
-    return r;
+    return max_over(table, pairs, [&](const Params& q) {
+      const double c = q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref);
+      const double g = q.law == MindlinRestitution ? q.gt * std::sqrt(m * q.kt * c) : q.gt * c;
+      return g / mt;
+    });
   }
   double stiffness(double delta_ref, double length_max,
                    const PairMask& pairs = PairMask::all()) const {
-    double k = 0;
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b) {
-        if (!pairs(a, b)) continue;
-        const Params& q = table.p[a][b];
-        k = std::max(k, q.kt * (q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref)));
-      }
-    return k;
+    return max_over(table, pairs, [&](const Params& q) {
+      return q.kt * (q.law == Constant ? 1.0 : std::sqrt(length_max * delta_ref));
+    });
   }
 };
 

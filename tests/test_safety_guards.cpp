@@ -105,3 +105,30 @@ TEST(AtomicOutput, UnfinishedFileNeverAppearsUnderItsFinalName) {
   EXPECT_EQ(H5Reader(path).reals("/a/b"), (std::vector<double>{1, 2, 3}));
   std::filesystem::remove_all(dir);
 }
+
+// Rolling and torsion springs and dashpots are guarded like the normal and tangential ones:
+// a stiffness or damping the explicit step cannot follow is refused before the first step
+// (they used to be left out of the guard, which saw only the normal contact here).
+TEST(SafetyGuards, StiffRollingOrTorsionSpringAndFastRollingDashpotAreRefused) {
+  using Rolling = ContactModel<LinearNormal, NoTangential, RollingTorsion>;
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 0.0);
+  DemParams prm;
+  prm.skin = 0.2;
+  prm.dt = 0.004;  // t_c/57 of the normal contact (kn = 1e5) for the smallest pair
+  auto build = [&](const RollingTorsion::Params& q) {
+    const Rolling model{LinearNormal::uniform(1e5, 0), {}, RollingTorsion::uniform(q)};
+    DemSystem<Exec, Rolling>(Particles<Exec>::from_host(h), box, model, prm);
+  };
+  EXPECT_NO_THROW(build({1e4, 10, 0.1, 1e4, 10, 0.1}));
+  for (const RollingTorsion::Params& q : {RollingTorsion::Params{1e9, 0, 0.1, 0, 0, 0.1},
+                                          RollingTorsion::Params{0, 0, 0.1, 1e9, 0, 0.1},
+                                          RollingTorsion::Params{0, 1e8, 0.1, 0, 0, 0.1}}) {
+    try {
+      build(q);
+      ADD_FAILURE() << "kr " << q.kr << ", ko " << q.ko << ", gamma_r " << q.gr << " accepted";
+    } catch (const PhysicsError& e) {
+      EXPECT_NE(std::string(e.what()).find("dt"), std::string::npos) << e.what();
+    }
+  }
+}
