@@ -203,6 +203,12 @@ void LammpsForceField::step() {
   };
   kick();
   for (int i = 0; i < 3 * n; ++i) x[i] += dt_ * v[i];
+  // A time step far too large sends atoms to infinity; the binning cannot place them.
+  for (int i = 0; i < 3 * n; ++i)
+    if (!std::isfinite(x[i]))
+      throw PhysicsError("atom " + std::to_string(i / 3 + 1) + " left to a non-finite position " +
+                         "at step " + std::to_string(steps_done + 1) + ": the time step is far " +
+                         "too large (lammps.timestep)");
   compute(true);
   kick();
   ++steps_done;

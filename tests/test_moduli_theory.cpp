@@ -50,3 +50,14 @@ TEST(ModuliTheory, DefaultSizeMomentIsTheFormulasValueForDiametersUniformFromOne
   const double mean = 2.0, second = (27.0 - 1.0) / (3 * 2.0), third = (81.0 - 1.0) / (4 * 2.0);
   EXPECT_NEAR(TheoryInput{}.D, mean * second / third, 1e-15);
 }
+
+// A packing without contacts (Z = 0, every particle a rattler) has no theory: its values are
+// NaN ("not applicable"), never inf, which used to reach results.h5.
+TEST(ModuliTheory, NoContactsGiveNotApplicableNeverInfinite) {
+  TheoryInput in;
+  in.phi = 0.6, in.z = 0, in.kt_kn = 0.5;
+  const auto r = moduli_theory(in);
+  for (double v : {r.chi, r.rho, r.zeta, r.rho_s, r.zeta_s, r.K_emt, r.G_emt, r.K_ft1, r.G_ft1,
+                   r.K_ft2, r.G_ft2})
+    EXPECT_FALSE(std::isinf(v)) << v;
+}

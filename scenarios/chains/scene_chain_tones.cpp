@@ -117,7 +117,7 @@ std::vector<double> row(const std::vector<double>& m, int r, long T) {
 void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
   ChainScene cs = read_chain_scene(scene);
   const int B = scene.small_integer("bands.count");
-  const long samples = scene.integer("time.samples");
+  const long samples = scene.small_integer("time.samples");
   std::vector<double> tone_list = scene.reals("wave.tones", {});
   const std::vector<double> centre_bands = scene.reals("wave.bands", {});
   const std::vector<double> amplitudes = scene.reals("wave.u0", {0.01, 0.001});

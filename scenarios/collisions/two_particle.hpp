@@ -163,8 +163,11 @@ CollisionResult collide_head_on(const Model& model, const CollisionSetup& s) {
   double t_start = -1, t_end = -1, prev_delta = delta;
   // Generous bound on the collision length: 100 undamped half periods at the guard stiffness.
   const double k = model.stiffness(params.max_overlap * std::min(s.radius1, s.radius2), 2 * sum);
-  const long max_steps =
-      static_cast<long>(100.0 * M_PI / std::sqrt(k * (1 / r.mass1 + 1 / r.mass2)) / s.dt) + 1000;
+  const double longest = 100.0 * M_PI / std::sqrt(k * (1 / r.mass1 + 1 / r.mass2)) / s.dt;
+  if (!(longest < 1e9))  // also a stiffness so small that its period overflows
+    throw PhysicsError("collision: the contact would last more than 1e9 steps (stiffness " +
+                       std::to_string(k) + "): raise the contact stiffness or the time step");
+  const long max_steps = static_cast<long>(longest) + 1000;
   double v_out = 0, e = e0;
   for (long k = 1; k <= max_steps; ++k) {
     if (s.record) {  // velocities before the step, for the mid-step average below

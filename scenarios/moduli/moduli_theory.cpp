@@ -2,6 +2,7 @@
 #include "scenarios/moduli/moduli_theory.hpp"
 
 #include <cmath>
+#include <initializer_list>
 
 namespace granular {
 
@@ -24,6 +25,11 @@ TheoryResult moduli_theory(const TheoryInput& in) {
   };
   r.K_ft1 = K(r.rho, 0), r.G_ft1 = G(r.rho, 0, r.zeta, 0);
   r.K_ft2 = K(r.rho, r.rho_s), r.G_ft2 = G(r.rho, r.rho_s, r.zeta, r.zeta_s);
+  // With (nearly) no contacts the closures divide by zero: the theories say nothing there
+  // (NaN, "not applicable"), never inf.
+  for (double* v : {&r.chi, &r.rho, &r.zeta, &r.rho_s, &r.zeta_s, &r.K_emt, &r.G_emt, &r.K_ft1,
+                    &r.G_ft1, &r.K_ft2, &r.G_ft2})
+    if (std::isinf(*v)) *v = std::nan("");
   return r;
 }
 

@@ -137,7 +137,8 @@ Setup read_setup(const SceneFile& s) {
   s.require(sv.ekin_ratio > 0, "preparation.ekin_ratio", "must be positive");
   s.require(sv.response_crossings > 0, "preparation.response_crossings", "must be positive");
   s.require(sv.max_step > 0 && sv.max_step < 0.1, "preparation.max_step", "must lie in (0, 0.1)");
-  s.require(sv.check_crossings > 0, "preparation.check_crossings", "must be positive");
+  s.require(sv.check_crossings > 0 && sv.check_crossings <= 1e3, "preparation.check_crossings",
+            "must lie in (0, 1000] crossing times");
   s.require(sv.max_cycles >= 1, "preparation.max_checks", "must be at least 1");
   s.require(sv.max_phase_steps >= sv.min_phase_steps, "preparation.max_phase_steps",
             "must be at least 100");
@@ -145,7 +146,8 @@ Setup read_setup(const SceneFile& s) {
   u.gas_damping_time = s.real("damping.gas_time");
   u.damping_crossings = s.real("damping.crossing_fraction", 0.5);
   s.require(u.gas_damping_time > 0, "damping.gas_time", "must be positive");
-  s.require(u.damping_crossings > 0, "damping.crossing_fraction", "must be positive");
+  s.require(u.damping_crossings > 0 && u.damping_crossings <= 1e3, "damping.crossing_fraction",
+            "must lie in (0, 1000] crossing times");
 
   u.amplitude = s.real("probe.amplitude", 2e-6);
   u.strain_crossings = s.real("probe.strain_crossings", 1.0);
