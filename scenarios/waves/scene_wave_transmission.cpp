@@ -158,8 +158,9 @@ std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
         // The last held states say whether the servo oscillated, crept or never loaded.
         std::ostringstream last;
         last.precision(6);
-        for (size_t k = held.size() > 8 ? held.size() - 8 : 0; k < held.size(); ++k)
-          last << (k ? ", " : "") << "gap " << held[k].first << " mm: " << held[k].second;
+        const size_t from = held.size() > 8 ? held.size() - 8 : 0;
+        for (size_t k = from; k < held.size(); ++k)
+          last << (k > from ? ", " : "") << "gap " << held[k].first << " mm: " << held[k].second;
         throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target) +
                            " MPa within preparation.max_time (now " + std::to_string(sigma) +
                            " MPa after " + std::to_string(held.size()) +
