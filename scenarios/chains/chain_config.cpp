@@ -45,7 +45,8 @@ ChainScene read_chain_scene(const SceneFile& scene) {
   scene.require(c.dt < edge, "time.dt",
                 "must be below the Verlet stability limit 2/omega_max = " + std::to_string(edge) +
                     " of the ordered chain");
-  scene.require(c.sample_every >= c.dt, "time.sample_every", "must be at least one time step");
+  scene.require(c.sample_every >= c.dt && c.sample_every <= 1e6 * c.dt, "time.sample_every",
+                "must lie between one and 1e6 time steps");
   scene.require(c.energy_growth > 1, "guard.energy_growth", "must be greater than 1");
   return c;
 }

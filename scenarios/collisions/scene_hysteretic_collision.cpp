@@ -28,7 +28,8 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   scene.require(density > 0, "particles.density", "must be positive");
   scene.require(d1 > 0, "particles.diameter_1", "must be positive");
   scene.require(d2 > 0, "particles.diameter_2", "must be positive");
-  scene.require(resolution >= 50, "collision.steps_per_contact", "must be at least 50");
+  scene.require(resolution >= 50 && resolution <= 10000000, "collision.steps_per_contact",
+                "must lie in [50, 1e7] (every step of a collision is recorded)");
   scene.reject_unknown_keys();
 
   if (!begin_outputs(opts)) return;

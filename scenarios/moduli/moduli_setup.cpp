@@ -63,6 +63,9 @@ Setup read_setup(const SceneFile& scene) {
   scene.require(s.amplitude > 0 && s.amplitude < 1e-2, "probe.amplitude", "must be in (0, 1e-2)");
   scene.require(s.strain_steps > 0 && s.probe_relax >= 0, "probe.strain_steps",
                 "and probe.relax_steps must be positive");
+  scene.require(s.probe_relax <= 100000000, "probe.relax_steps", "must be at most 1e8");
+  scene.require(s.relax_max > 0 && s.relax_max <= 100000000, "preparation.relax_max_steps",
+                "must lie in [1, 1e8]");
   scene.require(s.probe_inertial >= 0 && s.probe_inertial < 1e-2, "probe.inertial_number",
                 "must be in [0, 1e-2) (quasi-static probing: 1e-4 ... 1e-6)");
   for (double a : s.amplitudes)

@@ -114,7 +114,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   scene.require(params.skin > 0, "run.skin", "must be positive");
   scene.require(sample_every > 0, "run.sample_every", "must be positive");
   scene.require(checkpoint_every > 0, "run.checkpoint_every", "must be positive");
-  scene.require(relax_steps >= 0, "compression.relax_steps", "must not be negative");
+  scene.require(relax_steps >= 0 && relax_steps <= 100000000, "compression.relax_steps",
+                "must lie in [0, 1e8]");
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
   scene.reject_unknown_keys();
   check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away

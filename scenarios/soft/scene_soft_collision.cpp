@@ -98,6 +98,9 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
   scene.require(a > 0, "soft.diameter", "must be positive");
   scene.require(speed > 0, "soft.speed", "must be positive");
   scene.require(duration > 0, "soft.duration", "must be positive");
+  for (double d : dts)
+    scene.require(duration / d <= 1e7, "soft.duration",
+                  "takes more than 1e7 steps of soft.time_steps: shorten it");
   scene.require(every >= 1, "soft.sample_every", "must be at least 1");
   for (const auto& m : mats.materials)
     scene.require(m.density > 0, "materials." + m.name + ".density", "must be positive");

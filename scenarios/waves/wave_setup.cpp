@@ -71,7 +71,8 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.max_push > 0 && w.max_push < 0.05, "preparation.max_push", "must lie in (0, 0.05)");
   s.require(w.prep_friction >= 0, "preparation.friction", "must not be negative");
   s.require(w.wall_speed > 0, "preparation.wall_speed", "must be positive");
-  s.require(w.damping_time > 0, "preparation.damping_time", "must be positive");
+  s.require(w.damping_time > 0 && w.damping_time < w.max_time, "preparation.damping_time",
+            "must be positive and below preparation.max_time");
   s.require(w.tolerance > 0 && w.tolerance < 0.5, "preparation.tolerance", "must lie in (0, 0.5)");
   s.require(w.relax_time > 0, "preparation.relax_time", "must be positive");
   s.require(w.max_time > w.relax_time, "preparation.max_time", "must exceed relax_time");
@@ -94,7 +95,8 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.pre_time > 0, "pulse.pre_time", "must be positive (the pickers' noise window)");
   s.require(w.record_time > w.pre_time + w.duration, "pulse.record_time",
             "must exceed pre_time + duration");
-  s.require(w.sample_every >= 1, "pulse.sample_every", "must be at least 1");
+  s.require(w.sample_every >= 1 && w.sample_every <= 1000000, "pulse.sample_every",
+            "must lie in [1, 1e6] steps");
 
   w.slab_positions = s.reals("receivers.slab_positions");
   w.slab_width = s.real("receivers.slab_width", 2.0);
@@ -119,7 +121,8 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.dt_check = s.reals("run.dt_check", {});
   s.require(w.dt > 0, "run.dt", "must be positive");
   s.require(w.max_overlap > 0 && w.max_overlap < 0.5, "run.max_overlap", "must lie in (0, 0.5)");
-  for (double f : w.dt_check) s.require(f > 0 && f <= 1, "run.dt_check", "factors in (0, 1]");
+  for (double f : w.dt_check)
+    s.require(f >= 0.01 && f <= 1, "run.dt_check", "factors in [0.01, 1] (a run per factor)");
   w.restitution_check = s.reals("run.restitution_check", {});
   for (double e : w.restitution_check)
     s.require(e > 0 && e <= 1, "run.restitution_check", "restitutions in (0, 1]");
