@@ -255,3 +255,14 @@ TEST(SceneInputGuards, SwappedTracesAreRefusedNamingTheTraceKey) {
   EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
   std::filesystem::remove_all(opts.out_dir);
 }
+
+// Multi-contact factors far beyond the source's 1-1.65 make the corrections outweigh the pair
+// law the time-step guard sees: strain_gamma = 1e308 used to give NaN wall forces, exit 0.
+TEST(SceneInputGuards, MultiContactFactorsBeyondTenAreRefusedNamingTheKey) {
+  expect_refused(shipped_scene("confined_compression_quick.toml"),
+                 {"strain_gamma", "[1.0, 1e308]", "multicontact.strain_gamma"},
+                 run_confined_compression);
+  expect_refused(shipped_scene("confined_compression_quick.toml"),
+                 {"stress_beta", "[1.0, 11.0]", "multicontact.stress_beta"},
+                 run_confined_compression);
+}

@@ -16,6 +16,11 @@
 
 namespace granular {
 
+// The multi-contact factors the scenes accept: the source uses 1 to 1.65. Far above, the
+// corrections outweigh the pair law, whose stiffness is all the time-step guard sees (with
+// strain_gamma = 1e308 the forces became NaN without a stop).
+constexpr double kMaxMultiContactFactor = 10.0;
+
 struct SoftModel {
   std::string label;  // "classical", "mc_strain_gamma_1.12", "mc_stress_beta_1.65"
   MultiContact mc;
@@ -47,13 +52,15 @@ inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const Materia
   s.require_distinct("multicontact.strain_gamma", gammas);
   s.require_distinct("multicontact.stress_beta", betas);
   for (double g : gammas) {
-    s.require(g > 0, "multicontact.strain_gamma", "must be positive");
+    s.require(g > 0 && g <= kMaxMultiContactFactor, "multicontact.strain_gamma",
+              "must lie in (0, 10]");
     SoftModel sm{label("mc_strain_gamma_", g), base};
     sm.mc.mode = MultiContact::Strain, sm.mc.gamma = g;
     out.push_back(sm);
   }
   for (double b : betas) {
-    s.require(b > 0, "multicontact.stress_beta", "must be positive");
+    s.require(b > 0 && b <= kMaxMultiContactFactor, "multicontact.stress_beta",
+              "must lie in (0, 10]");
     SoftModel sm{label("mc_stress_beta_", b), base};
     sm.mc.mode = MultiContact::Stress, sm.mc.beta = b;
     out.push_back(sm);
