@@ -109,17 +109,39 @@ TEST(CheckpointResume, CheckpointIntervalLeavesTheTrajectoryBitwiseUnchanged) {
   std::filesystem::remove_all(root);
 }
 
-// Six garbled bytes in a checkpoint used to resume the run with other results, exit 0: the
-// file's checksum now refuses it, naming the file, before any state is taken from it.
-TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
-  const auto root = granular::testing::unique_temp_path("granular_garbled_checkpoint");
+namespace {
+// A run stopped after its checkpoint at step 3000 in <root>/run; returns the checkpoint.
+std::string stopped_run(const std::filesystem::path& root, RunOptions& opts) {
   std::filesystem::remove_all(root);
-  RunOptions opts;
   opts.progress = false, opts.charts = false;
   opts.out_dir = (root / "run").string();
   run_isotropic_compression(scene(std::string(kScene) + "stop_after = 3000\n", "a.toml"), opts);
   const std::string checkpoint = (root / "run" / "checkpoint.h5").string();
-  ASSERT_TRUE(std::filesystem::exists(checkpoint));
+  EXPECT_TRUE(std::filesystem::exists(checkpoint));
+  return checkpoint;
+}
+
+// --resume must be refused with an InputError naming the checkpoint and `detail`.
+void expect_resume_refused(RunOptions opts, const std::string& checkpoint,
+                           const std::string& detail) {
+  opts.resume = true;
+  try {
+    run_isotropic_compression(scene(kScene, "a.toml"), opts);
+    ADD_FAILURE() << "a damaged checkpoint was resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(checkpoint), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(detail), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/results.h5"));
+}
+}  // namespace
+
+// Six garbled bytes in a checkpoint used to resume the run with other results, exit 0: the
+// file's checksum now refuses it, naming the file, before any state is taken from it.
+TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
+  const auto root = granular::testing::unique_temp_path("granular_garbled_checkpoint");
+  RunOptions opts;
+  const std::string checkpoint = stopped_run(root, opts);
   {
     std::fstream f(checkpoint, std::ios::in | std::ios::out | std::ios::binary);
     const auto size = static_cast<std::streamoff>(std::filesystem::file_size(checkpoint));
@@ -128,14 +150,7 @@ TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
       f.put('\x7f');
     }
   }
-  opts.resume = true;
-  try {
-    run_isotropic_compression(scene(kScene, "a.toml"), opts);
-    FAIL() << "a garbled checkpoint was resumed";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(checkpoint), std::string::npos) << e.what();
-  }
-  EXPECT_FALSE(std::filesystem::exists(root / "run" / "results.h5"));
+  expect_resume_refused(opts, checkpoint, "checksum");
   std::filesystem::remove_all(root);
 }
 
@@ -144,12 +159,8 @@ TEST(CheckpointResume, CheckpointWithGarbledBytesIsRefusedNamingTheFile) {
 // used to name only "restart group /restart".
 TEST(CheckpointResume, RestartDatasetOfAnotherSizeIsRefusedNamingTheCheckpoint) {
   const auto root = granular::testing::unique_temp_path("granular_restart_size");
-  std::filesystem::remove_all(root);
   RunOptions opts;
-  opts.progress = false, opts.charts = false;
-  opts.out_dir = (root / "run").string();
-  run_isotropic_compression(scene(std::string(kScene) + "stop_after = 3000\n", "a.toml"), opts);
-  const std::string checkpoint = (root / "run" / "checkpoint.h5").string();
+  const std::string checkpoint = stopped_run(root, opts);
   {
     const hid_t file = H5Fopen(checkpoint.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     ASSERT_GE(file, 0);
@@ -165,13 +176,6 @@ TEST(CheckpointResume, RestartDatasetOfAnotherSizeIsRefusedNamingTheCheckpoint) 
     std::fstream f(checkpoint, std::ios::in | std::ios::out | std::ios::binary);
     f.write(std::string(512, '\0').data(), 512);  // no checksum tag: read as it is
   }
-  opts.resume = true;
-  try {
-    run_isotropic_compression(scene(kScene, "a.toml"), opts);
-    FAIL() << "a checkpoint with malformed restart scalars was resumed";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(checkpoint), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("scalars"), std::string::npos) << e.what();
-  }
+  expect_resume_refused(opts, checkpoint, "scalars");
   std::filesystem::remove_all(root);
 }
