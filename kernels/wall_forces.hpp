@@ -63,6 +63,78 @@ struct NoWallHook {
   KOKKOS_INLINE_FUNCTION void apart(int, int) const {}
 };
 
+// The wall pass over one particle: adds its wall contact forces and gravity to f and torque,
+// advances its wall histories and records each wall's share for the wall sums. A functor class
+// rather than a lambda: nvcc's wrapper of a host-device lambda inside a function template
+// instantiated in several translation units can be linked with a null copy helper, and the
+// walls' tests then jumped to address 0 on a device (perf/README.md, design note on the GPU).
+template <class ExecSpace, class Model, class HistoryView, class RecordView, class Hook>
+struct WallForcePass {
+  ParticleViews<ExecSpace> pv;
+  typename Particles<ExecSpace>::vec_view f, torque;
+  typename WallSet<ExecSpace>::view_type walls;
+  int nwalls;
+  HistoryView history;
+  RecordView record;
+  Model m;
+  Hook hook;
+  double g[3];
+  double dt;
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    constexpr int H = Model::history;
+    constexpr bool rot = Model::rotations;
+    constexpr int WC = kWallColumns;
+    const Body bi = load_body(pv, i, rot);
+    double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
+    double qi[3] = {0, 0, 0};
+    for (int w = 0; w < nwalls; ++w) {
+      const Wall wall = walls(w);
+      PairState s;
+      if (!wall_geometry(bi, wall, rot, s)) {
+        // Most particles touch no wall: their record and history are already zero (the
+        // contact flag says so), and rewriting them every step cost more memory traffic
+        // than the contacts themselves.
+        if (record(i, w * WC + 6) != 0.0) {
+          for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
+        }
+        if constexpr (Hook::active) hook.apart(i, w);
+        continue;
+      }
+      double h[H > 0 ? H : 1];
+      if constexpr (H > 0)
+        for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
+      PairForce out;
+      if constexpr (Hook::active)
+        hook.evaluate(m, i, w, s, dt, h, out);
+      else
+        m.evaluate(s, dt, h, out);
+      if constexpr (H > 0)
+        for (int c = 0; c < H; ++c) history(i, w * H + c) = h[c];
+      for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
+      if constexpr (rot)
+        for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
+      // Reaction on the wall: force -f and, about the wall point p, the torque that
+      // balances the particle's angular momentum change: -(x_i - p) x f - q_i.
+      const double r[3] = {bi.x[0] - wall.p[0], bi.x[1] - wall.p[1], bi.x[2] - wall.p[2]};
+      double rxf[3];
+      cross3(r, out.f, rxf);
+      for (int d = 0; d < 3; ++d) {
+        record(i, w * WC + d) = -out.f[d];
+        record(i, w * WC + 3 + d) = -rxf[d] - (rot ? out.q[d] : 0.0);
+      }
+      record(i, w * WC + 6) = 1.0;
+      record(i, w * WC + 7) = m.energy(s, h);
+      record(i, w * WC + 8) = s.delta / s.ai;
+    }
+    for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
+    if constexpr (rot)
+      for (int d = 0; d < 3; ++d) torque(i, d) += qi[d];
+  }
+};
+
 // Adds wall contact forces and gravity to f and torque (after the pair gather), advances
 // the wall histories, and records each wall's share per particle for the wall sums.
 // history: (n, walls * H); record: (n, walls * kWallColumns).
@@ -72,72 +144,42 @@ void add_external_forces(const Particles<ExecSpace>& p,
                          const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
                          const HistoryView& history, const RecordView& record, const Model& model,
                          const double gravity[3], double dt, const Hook& wall_hook = Hook()) {
-  const ParticleViews<ExecSpace> pv(p);
-  auto f = p.f, torque = p.torque;
-  const Model m = model;
-  const Hook hook = wall_hook;
-  const double g[3] = {gravity[0], gravity[1], gravity[2]};
-  Kokkos::parallel_for(
-      Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), KOKKOS_LAMBDA(const int i) {
-        constexpr int H = Model::history;
-        constexpr bool rot = Model::rotations;
-        constexpr int WC = kWallColumns;
-        // nvcc: a variable first captured inside `if constexpr` is an error, so every
-        // capture used only in such a branch is named here first.
-        (void)history.extent(0);
-        (void)torque.extent(0);
-        (void)hook;
-        (void)m;
-        (void)dt;
-        const Body bi = load_body(pv, i, rot);
-        double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
-        double qi[3] = {0, 0, 0};
-        for (int w = 0; w < nwalls; ++w) {
-          const Wall wall = walls(w);
-          PairState s;
-          if (!wall_geometry(bi, wall, rot, s)) {
-            // Most particles touch no wall: their record and history are already zero (the
-            // contact flag says so), and rewriting them every step cost more memory traffic
-            // than the contacts themselves.
-            if (record(i, w * WC + 6) != 0.0) {
-              for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
-              if constexpr (H > 0)
-                for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
-            }
-            if constexpr (Hook::active) hook.apart(i, w);
-            continue;
-          }
-          double h[H > 0 ? H : 1];
-          if constexpr (H > 0)
-            for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
-          PairForce out;
-          if constexpr (Hook::active)
-            hook.evaluate(m, i, w, s, dt, h, out);
-          else
-            m.evaluate(s, dt, h, out);
-          if constexpr (H > 0)
-            for (int c = 0; c < H; ++c) history(i, w * H + c) = h[c];
-          for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
-          if constexpr (rot)
-            for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
-          // Reaction on the wall: force -f and, about the wall point p, the torque that
-          // balances the particle's angular momentum change: -(x_i - p) x f - q_i.
-          const double r[3] = {bi.x[0] - wall.p[0], bi.x[1] - wall.p[1], bi.x[2] - wall.p[2]};
-          double rxf[3];
-          cross3(r, out.f, rxf);
-          for (int d = 0; d < 3; ++d) {
-            record(i, w * WC + d) = -out.f[d];
-            record(i, w * WC + 3 + d) = -rxf[d] - (rot ? out.q[d] : 0.0);
-          }
-          record(i, w * WC + 6) = 1.0;
-          record(i, w * WC + 7) = m.energy(s, h);
-          record(i, w * WC + 8) = s.delta / s.ai;
-        }
-        for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
-        if constexpr (rot)
-          for (int d = 0; d < 3; ++d) torque(i, d) += qi[d];
-      });
+  const WallForcePass<ExecSpace, Model, HistoryView, RecordView, Hook> pass{
+      ParticleViews<ExecSpace>(p),
+      p.f,
+      p.torque,
+      walls,
+      nwalls,
+      history,
+      record,
+      model,
+      wall_hook,
+      {gravity[0], gravity[1], gravity[2]},
+      dt};
+  Kokkos::parallel_for(Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), pass);
 }
+
+// The largest overlap / a_i in column 8 of one wall's records (a functor, as above).
+template <class Cols>
+struct MaxOverlapPass {
+  Cols cols;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, double& m) const {
+    const double o = cols(i, 8);
+    m = o > m ? o : m;
+  }
+};
+
+// New row i of b is old row order(i) of a (a functor, as above).
+template <class View2D, class Order>
+struct PermuteRowsPass {
+  View2D b, a;
+  Order order;
+  int nc;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    const int o = order(i);
+    for (int c = 0; c < nc; ++c) b(i, c) = a(o, c);
+  }
+};
 
 // What the walls feel, summed over particles in a fixed order (thread-count independent).
 struct WallLoad {
@@ -159,13 +201,8 @@ std::vector<WallLoad> wall_loads(const RecordView& record, int n, int nwalls) {
     out[w].contacts = sums[6];
     out[w].energy = sums[7];
     double mo = 0.0;
-    Kokkos::parallel_reduce(
-        "dem::wall_loads::max_overlap", Kokkos::RangePolicy<ExecSpace>(0, n),
-        KOKKOS_LAMBDA(const int i, double& m) {
-          const double o = cols(i, 8);
-          m = o > m ? o : m;
-        },
-        Kokkos::Max<double>(mo));
+    Kokkos::parallel_reduce("dem::wall_loads::max_overlap", Kokkos::RangePolicy<ExecSpace>(0, n),
+                            MaxOverlapPass<decltype(cols)>{cols}, Kokkos::Max<double>(mo));
     out[w].max_overlap = mo;
   }
   return out;
@@ -176,13 +213,8 @@ template <class ExecSpace, class View2D, class Order>
 void permute_rows(View2D& a, const Order& order, int n) {
   if (a.extent(0) == 0) return;
   View2D b(a.label(), a.extent(0), a.extent(1));
-  auto src = a;
-  const int nc = static_cast<int>(a.extent(1));
-  Kokkos::parallel_for(
-      "dem::permute_rows", Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i) {
-        const int o = order(i);
-        for (int c = 0; c < nc; ++c) b(i, c) = src(o, c);
-      });
+  Kokkos::parallel_for("dem::permute_rows", Kokkos::RangePolicy<ExecSpace>(0, n),
+                       PermuteRowsPass<View2D, Order>{b, a, order, static_cast<int>(a.extent(1))});
   a = b;
 }
 
