@@ -12,14 +12,12 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/pair_mixing.hpp"
 #include "kernels/contact_model.hpp"
 
 namespace granular {
 
-inline double harmonic_mix(double a, double b) {
-  if (a == b) return a;  // also keeps infinite friction infinite
-  return (a + b) > 0 ? 2.0 * a * b / (a + b) : 0.0;
-}
+inline double harmonic_mix(double a, double b) { return mix_pair(PairRule::Harmonic, a, b); }
 
 // Series form of the same mean: exact with an infinite member (2/(1/inf + 1/b) = 2b).
 inline double series_mix(double a, double b) {

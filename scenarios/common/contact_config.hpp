@@ -27,12 +27,6 @@ struct ContactConfig {
   static ContactConfig read(const SceneFile& scene);
 };
 
-// Harmonic ("product over sum") mixing, normalised so that a species paired with itself
-// keeps its own value: p_ij = 2 p_i p_j / (p_i + p_j).
-inline double harmonic_pair(double pi, double pj) {
-  return (pi + pj) > 0 ? 2.0 * pi * pj / (pi + pj) : 0.0;
-}
-
 template <class F>
 void with_contact_model(const ContactConfig& c, F&& f) {
   auto with_normal = [&](auto normal) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/pair_mixing.hpp"
 #include "core/restitution.hpp"
 
 namespace granular {
@@ -73,12 +74,7 @@ int MaterialSet::at(const SceneFile& s, const std::string& key) const {
 }
 
 double MaterialSet::pair(double p, double q) const {
-  if (p == q && pair_rule == "harmonic") return p;  // also keeps inf friction inf
-  if (std::isinf(p) && std::isinf(q)) return p;
-  const double f = pair_rule == "harmonic" ? 2.0 : 1.0;
-  if (std::isinf(p)) return f * q;
-  if (std::isinf(q)) return f * p;
-  return p + q > 0 ? f * p * q / (p + q) : 0.0;
+  return mix_pair(pair_rule_named(pair_rule), p, q);
 }
 
 double MaterialSet::effective_young(int a, int b) const {

@@ -5,14 +5,6 @@
 
 namespace granular {
 
-double pair_rule_value(const std::string& rule, double p, double q) {
-  const double f = rule == "product_over_sum" ? 1.0 : 2.0;
-  if (std::isinf(p) && std::isinf(q)) return p;  // both never slide: neither does the pair
-  if (std::isinf(p)) return f * q;
-  if (std::isinf(q)) return f * p;
-  return p + q > 0 ? f * p * q / (p + q) : 0.0;
-}
-
 MixtureMaterials MixtureMaterials::read(const SceneFile& s) {
   MixtureMaterials m;
   const auto names = s.tables("materials");
@@ -69,7 +61,7 @@ int MixtureMaterials::slot(const SceneFile& s, const std::string& key,
 }
 
 double MixtureMaterials::pair(int a, int b, double p, double q) const {
-  return a == b ? p : pair_rule_value(pair_rule, p, q);
+  return a == b ? p : mix_pair(pair_rule_named(pair_rule), p, q);
 }
 
 double MixtureMaterials::effective_young(int a, int b) const {

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "core/pair_mixing.hpp"
 #include "core/scene_file.hpp"
 #include "kernels/contact_model.hpp"
 
@@ -49,8 +50,5 @@ struct MixtureMaterials {
   // The model for every pair; `rule` overrides pair_rule ("" keeps it).
   MixtureModel model(const std::string& rule = "") const;
 };
-
-// The two rules for one parameter of two unlike species.
-double pair_rule_value(const std::string& rule, double p, double q);
 
 }  // namespace granular
