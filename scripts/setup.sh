@@ -7,6 +7,8 @@
 #   GRANULAR_CACHE   where Kokkos is cached   (default ${XDG_CACHE_HOME:-$HOME/.cache}/granular)
 #   GRANULAR_BUILD   project build directory  (default <repo>/build)
 #   GRANULAR_JOBS    parallel build jobs      (default: number of cores)
+#   GRANULAR_TARGETS build targets, space-separated (default: all; the run command builds
+#                    only `granular`, so the first result does not wait for tests and benchmarks)
 #   GRANULAR_CUDA_CHECK=1  also build the engine with the CUDA backend (compile and link
 #                    only) in $GRANULAR_CUDA_BUILD (default <repo>/build-cuda) when nvcc exists
 #   GRANULAR_MPI=0   leave OpenMPI out (installed by default: the test suite checks that an
@@ -114,8 +116,10 @@ if [ "${GRANULAR_SKIP_BUILD:-0}" != 1 ]; then
     cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_host" \
       -DGRANULAR_MPI="$([ "${GRANULAR_MPI:-1}" != 0 ] && echo ON || echo OFF)" >/dev/null
   fi
-  say "building the project"
-  cmake --build "$build" -j "$jobs"
+  targets=()
+  for t in ${GRANULAR_TARGETS:-}; do targets+=(--target "$t"); done
+  say "building the project${GRANULAR_TARGETS:+ ($GRANULAR_TARGETS)}"
+  cmake --build "$build" -j "$jobs" "${targets[@]}"
 fi
 
 # ---- 4. CUDA compile check (optional) -------------------------------------------------
