@@ -8,7 +8,8 @@ build=${GRANULAR_BUILD:-$repo/build}
 "$repo/scripts/setup.sh"
 # One test process at a time: each already uses the cores (its 2-thread variant would
 # otherwise compete with another test for them, and spinning threads slow both down).
-# The `verify` label (the quick variants' references, about 20 minutes) is left out here:
-# run it with `ctest -L verify` in the build folder.
-(cd "$build" && ctest --output-on-failure -LE verify)
+# The `verify` label (the quick variants' references, about 20 minutes) and the `long` label
+# (full scenes, tens of minutes each) are left out here: run them with `ctest -L verify` or
+# `ctest -L long` in the build folder.
+(cd "$build" && ctest --output-on-failure -LE 'verify|long')
 GRANULAR_CUDA_CHECK=1 GRANULAR_SKIP_BUILD=1 "$repo/scripts/setup.sh"

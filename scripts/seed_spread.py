@@ -1,0 +1,144 @@
+#!/usr/bin/python3
+"""Runs one scene over several packings (seeds) and reports every summary number as
+mean +- standard error over them: figures of one realization (wave speeds, Q, exponents)
+quoted with their spread.
+
+    scripts/seed_spread.py GRANULAR SCENE.toml --seed-key column.seed --seeds 1,2,3,4,5
+                           --out DIR [--threads N] [--quantities PATTERN,...] [--reuse]
+
+Each seed runs a copy of the scene file, beside the original (relative input paths keep
+their meaning), with `<table>.<key>` set to the seed; the copy is removed afterwards. Writes
+DIR/seed_<k>/ (each run's outputs), DIR/spread.json (for every numeric summary path: values,
+mean, standard error, n) and DIR/spread.md (the paths matching --quantities, fnmatch patterns;
+default every path). A seed whose run fails is listed with its message and left out of the
+statistics; the script exits 1 when any failed. --reuse takes a seed's earlier run in
+DIR/seed_<k>/ (its summary.json) instead of running it again.
+"""
+import argparse
+import fnmatch
+import json
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+SKIPPED = ("run.", "parameters.", "scene_file")
+
+
+def flatten(value, at, out):
+    if isinstance(value, dict):
+        for k, v in value.items():
+            flatten(v, f"{at}.{k}" if at else k, out)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            flatten(v, f"{at}[{i}]", out)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        if math.isfinite(value) and not at.startswith(SKIPPED) and "seconds" not in at:
+            out[at] = float(value)
+
+
+def with_seed(text, table, key, seed):
+    """The scene text with key = seed inside [table] (added at the table's top if absent)."""
+    lines = text.splitlines()
+    head = re.compile(r"^\s*\[([^\]]+)\]")
+    inside, start = False, None
+    for i, line in enumerate(lines):
+        m = head.match(line)
+        if m:
+            inside = m.group(1).strip() == table
+            if inside:
+                start = i
+            continue
+        if inside and re.match(rf"^\s*{re.escape(key)}\s*=", line):
+            lines[i] = f"{key} = {seed}"
+            return "\n".join(lines) + "\n"
+    if start is None:
+        raise SystemExit(f"the scene has no [{table}] table for {table}.{key}")
+    lines.insert(start + 1, f"{key} = {seed}")
+    return "\n".join(lines) + "\n"
+
+
+def mean_se(values):
+    n = len(values)
+    m = sum(values) / n
+    if n < 2:
+        return m, float("nan")
+    var = sum((v - m) ** 2 for v in values) / (n - 1)
+    return m, math.sqrt(var / n)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("granular")
+    ap.add_argument("scene")
+    ap.add_argument("--seed-key", required=True, help="<table>.<key> of the packing's seed")
+    ap.add_argument("--seeds", default="1,2,3,4,5")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--quantities", default="*")
+    ap.add_argument("--reuse", action="store_true", help="keep finished runs found in --out")
+    args = ap.parse_args()
+    table, _, key = args.seed_key.rpartition(".")
+    if not table:
+        raise SystemExit("--seed-key must be <table>.<key>")
+    seeds = [int(s) for s in args.seeds.split(",") if s]
+    scene = Path(args.scene).resolve()
+    text = scene.read_text()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    runs, failed = {}, {}
+    for seed in seeds:
+        summary = out / f"seed_{seed}" / "summary.json"
+        if args.reuse and summary.exists():
+            runs[seed] = {}
+            flatten(json.loads(summary.read_text()), "", runs[seed])
+            print(f"seed {seed}: reused", flush=True)
+            continue
+        copy = scene.with_name(f".{scene.stem}_seed_{seed}.toml")
+        copy.write_text(with_seed(text, table, key, seed))
+        cmd = [args.granular, "run", str(copy), "--out", str(out / f"seed_{seed}"), "--quiet"]
+        if args.threads:
+            cmd += ["--threads", str(args.threads)]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True)
+        finally:
+            copy.unlink()
+        if proc.returncode != 0:
+            failed[seed] = (proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:]
+            print(f"seed {seed}: exit {proc.returncode}: {failed[seed]}", flush=True)
+            continue
+        values = {}
+        flatten(json.loads((out / f"seed_{seed}" / "summary.json").read_text()), "", values)
+        runs[seed] = values
+        print(f"seed {seed}: done", flush=True)
+    if not runs:
+        sys.exit("no seed ran to its end")
+    done = sorted(runs)
+    paths = sorted(set.intersection(*(set(v) for v in runs.values())))
+    spread = {}
+    for p in paths:
+        vals = [runs[s][p] for s in done]
+        m, se = mean_se(vals)
+        spread[p] = {"values": vals, "mean": m, "standard_error": se, "n": len(vals)}
+    (out / "spread.json").write_text(json.dumps(
+        {"scene": str(args.scene), "seed_key": args.seed_key, "seeds": done,
+         "failed": {str(k): v for k, v in failed.items()}, "quantities": spread}, indent=1))
+    patterns = [q for q in args.quantities.split(",") if q]
+    rows = [p for p in paths if any(fnmatch.fnmatch(p, q) for q in patterns)]
+    md = [f"Spread of `{scene.name}` over {len(done)} packings ({args.seed_key} = "
+          f"{', '.join(map(str, done))}): mean ± standard error\n"]
+    for seed, msg in failed.items():
+        md.append(f"Seed {seed} did not finish: {' '.join(msg)}\n")
+    md += ["| quantity | mean ± s.e. | values |", "|---|---|---|"]
+    for p in rows:
+        q = spread[p]
+        md.append(f"| `{p}` | {q['mean']:.4g} ± {q['standard_error']:.2g} | "
+                  + ", ".join(f"{v:.4g}" for v in q["values"]) + " |")
+    (out / "spread.md").write_text("\n".join(md) + "\n")
+    print("\n".join(md))
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
