@@ -58,14 +58,4 @@ long chain_steps_per_sample(const SceneFile& scene, const ChainScene& c) {
   return steps;
 }
 
-Json chain_summary_header(const SceneFile& scene, const std::string& name) {
-  Json summary = Json::object();
-  summary["scene"] = name;
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
-  return summary;
-}
-
 }  // namespace granular

@@ -23,9 +23,6 @@ struct ChainScene {
 
 ChainScene read_chain_scene(const SceneFile& scene);
 
-// {"scene", "scene_file", "parameters": every key used}.
-Json chain_summary_header(const SceneFile& scene, const std::string& name);
-
 // Steps per sample interval; the interval must be a whole number of time steps.
 long chain_steps_per_sample(const SceneFile& scene, const ChainScene& c);
 

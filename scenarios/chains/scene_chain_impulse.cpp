@@ -16,6 +16,7 @@
 #include "kernels/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
 #include "scenarios/common/power_law_fit.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -268,7 +269,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     return;
   }
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = chain_summary_header(scene, "chain_impulse");
+  Json summary = scene_summary(scene, "chain_impulse");
   Json runs = Json::array();
   std::vector<double> xis, residual_means, residual_ratios;
   WallClock total_clock;

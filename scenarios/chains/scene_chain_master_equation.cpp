@@ -17,6 +17,7 @@
 #include "core/progress.hpp"
 #include "kernels/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -216,7 +217,7 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
     return;
   }
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = chain_summary_header(scene, "chain_master_equation");
+  Json summary = scene_summary(scene, "chain_master_equation");
   Json runs = Json::array();
   WallClock total_clock;
   Json cost_runs = Json::array();

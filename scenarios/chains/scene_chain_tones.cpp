@@ -18,6 +18,7 @@
 #include "core/progress.hpp"
 #include "kernels/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -179,7 +180,7 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
   const int nband = fband + 1 < B ? fband + 1 : fband - 1;  // the neighbour whose rise is fitted
 
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = chain_summary_header(scene, "chain_tones");
+  Json summary = scene_summary(scene, "chain_tones");
   Json runs_json = Json::array();
   WallClock clock;
   for (size_t k = 0; k < cs.xis.size(); ++k) {

@@ -8,6 +8,7 @@
 
 #include "core/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -34,12 +35,7 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
 
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "hysteretic_collision";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "hysteretic_collision");
   Json cases = Json::array();
   const double m1 = density * M_PI / 6 * d1 * d1 * d1, m2 = density * M_PI / 6 * d2 * d2 * d2;
   const double m = m1 * m2 / (m1 + m2);

@@ -15,6 +15,7 @@
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
 #include "scenarios/common/materials.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -109,12 +110,7 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
                         : 0.0;
 
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "impact";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "impact");
   summary["effective_young_modulus"] = estar;
   summary["effective_shear_modulus"] = mats.effective_shear(c.sphere, c.target);
   summary["reduced_radius"] = rstar;

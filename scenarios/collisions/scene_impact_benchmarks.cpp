@@ -14,6 +14,7 @@
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
 #include "scenarios/common/materials.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -139,12 +140,7 @@ void run_impact_benchmarks(const SceneFile& scene, const RunOptions& opts) {
   const BenchScene b = read_scene(scene);
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "impact_benchmarks";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "impact_benchmarks");
   summary["coulomb_limit"] =
       "mu |f_n| of the total normal force (elastic + dashpot), as dem.md writes it";
   Json cases = Json::array();

@@ -6,6 +6,7 @@
 
 #include "core/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -38,12 +39,7 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
 
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "two_particle_linear";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "two_particle_linear");
   Json cases = Json::array();
   std::vector<double> mass_ratio, speed, tc_meas, tc_closed, e_meas, e_closed;
   double worst_tc = 0, worst_e = 0, worst_p = 0;

@@ -84,6 +84,16 @@ FileStamp stamp(const std::string& path) {
 
 }  // namespace
 
+Json scene_summary(const SceneFile& scene, const std::string& name) {
+  Json summary = Json::object();
+  summary["scene"] = name;
+  summary["scene_file"] = scene.path();
+  Json& params = summary["parameters"];
+  params = Json::object();
+  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  return summary;
+}
+
 std::string kokkos_backends() {
   std::string b;
 #ifdef KOKKOS_ENABLE_CUDA

@@ -10,6 +10,11 @@
 
 namespace granular {
 
+// The opening of every summary.json: {"scene": name, "scene_file": the path as given,
+// "parameters": every key of the scene file that the driver used, with its text}. The driver
+// adds its results after it; the run record ("run") is added by run_scene.
+Json scene_summary(const SceneFile& scene, const std::string& name);
+
 // "OpenMP Serial", the Kokkos backends this build has.
 std::string kokkos_backends();
 

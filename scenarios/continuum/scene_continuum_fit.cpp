@@ -13,6 +13,7 @@
 #include "core/deformation_paths.hpp"
 #include "core/output.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/continuum/continuum_fitting.hpp"
 #include "scenarios/continuum/continuum_shear_dem.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -171,12 +172,7 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "continuum_fit";
-  summary["scene_file"] = scene.path();
-  Json& pj = summary["parameters"];
-  pj = Json::object();
-  for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "continuum_fit");
   summary["volume_fraction_update"] = to_string(s.update);
 
   // 1. The source's example: isotropic compression from nu0 to nu_end, both nu updates.

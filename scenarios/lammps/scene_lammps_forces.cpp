@@ -145,12 +145,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "pair_style", model.describe());
   h5.commit();
 
-  Json summary = Json::object();
-  summary["scene"] = "lammps_forces";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "lammps_forces");
   Json choices = Json::object();
   choices["pair_style"] = model.describe();
   choices["box"] = data.triclinic() ? "triclinic" : "orthogonal";

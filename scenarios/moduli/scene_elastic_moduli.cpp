@@ -29,6 +29,7 @@
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/jamming_point.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_preparation.hpp"
@@ -76,12 +77,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   });
   if (s.start_from.empty()) require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
   if (!begin_outputs(opts)) return;
-  Json summary = Json::object();
-  summary["scene"] = "elastic_moduli";
-  summary["scene_file"] = scene.path();
-  Json& pj = summary["parameters"];
-  pj = Json::object();
-  for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "elastic_moduli");
   Outputs out;
   // Finished preparation variants are checkpointed here; a fresh run starts without them.
   const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);

@@ -14,6 +14,7 @@
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -251,12 +252,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       break;
     }
 
-  Json summary = Json::object();
-  summary["scene"] = "isotropic_compression";
-  summary["scene_file"] = scene.path();
-  Json& params_json = summary["parameters"];
-  params_json = Json::object();
-  for (const auto& [k, v] : scene.used()) params_json[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "isotropic_compression");
   Json& res = summary["results"];
   res = Json::object();
   res["particles"] = gas.count;

@@ -16,6 +16,7 @@
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/materials.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/common/wall_config.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -307,12 +308,7 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   });
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "confined_compression";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "confined_compression");
   Json prep = Json::object();
   ConfigState state;
   const auto t0 = std::chrono::steady_clock::now();

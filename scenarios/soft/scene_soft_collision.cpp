@@ -11,6 +11,7 @@
 #include "core/output.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/materials.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/soft/soft_models.hpp"
 
@@ -110,12 +111,7 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
                                        {"five", {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}}};
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "soft_collision";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "soft_collision");
   Json runs = Json::object();
   for (const Layout& layout : layouts)
     for (size_t s = 0; s < mats.materials.size(); ++s) {

@@ -44,6 +44,7 @@
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -512,12 +513,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   for (const auto& [k, v] : fit_cols) h5.write("/fits/" + k, v);
   h5.commit();
 
-  Json summary = Json::object();
-  summary["scene"] = "mixture_moduli";
-  summary["scene_file"] = scene.path();
-  Json& pj = summary["parameters"];
-  pj = Json::object();
-  for (const auto& [k, v] : scene.used()) pj[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "mixture_moduli");
   Json& ch = summary["choices"];
   ch = Json::object();
   Json mats = Json::object();

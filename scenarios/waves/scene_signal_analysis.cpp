@@ -9,6 +9,7 @@
 #include "core/output.hpp"
 #include "core/synthetic_signals.hpp"
 #include "core/trace_io.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/signal_report.hpp"
 
@@ -173,12 +174,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
 
   if (!begin_outputs(opts)) return;
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "signal_analysis";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "signal_analysis");
   if (synthetic) {
     Json out = Json::object();
     run_synthetic(syn, settings, h5, out, opts.out_dir);

@@ -21,6 +21,7 @@
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
 #include "scenarios/common/config_state.hpp"
+#include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/wave_setup.hpp"
@@ -480,12 +481,7 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
                       [&](const auto& m) { states = prepare(m, w, density, h, box, opts); });
 
   H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = Json::object();
-  summary["scene"] = "wave_transmission";
-  summary["scene_file"] = scene.path();
-  Json& params = summary["parameters"];
-  params = Json::object();
-  for (const auto& [k, v] : scene.used()) params[k] = Json::raw(v);
+  Json summary = scene_summary(scene, "wave_transmission");
   summary["particles"] = h.size();
   summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
   summary["pair_rule"] = w.mats.pair_rule;
