@@ -266,3 +266,41 @@ TEST(SceneInputGuards, MultiContactFactorsBeyondTenAreRefusedNamingTheKey) {
                  {"stress_beta", "[1.0, 11.0]", "multicontact.stress_beta"},
                  run_confined_compression);
 }
+
+// Found by the long real-run fuzz (seed 3): a phase of 2^31 us ran for years (the wave scene's
+// probe, the mixture study's gas relaxation), the continuum fit's own gas check let
+// shear.diameter_max = 1e308 through to a segmentation fault, and a confined box 2^31 mm wide
+// ended in std::bad_alloc. Each is refused naming its key,
+// in check mode, so a missing guard cannot start the run.
+TEST(SceneInputGuards, PhasesOfYearsAndOverflowingGasDiametersAreRefused) {
+  auto check_waves = [](const SceneFile& s, const RunOptions& o) {
+    RunOptions c = o;
+    c.check_only = true;
+    run_wave_transmission(s, c);
+  };
+  const std::string waves = shipped_scene("wave_transmission_quick.toml");
+  for (const char* key : {"hold_time", "ramp_time", "record_time", "final_relax_time"}) {
+    const std::string table = std::string(key) == "record_time"        ? "pulse."
+                              : std::string(key) == "final_relax_time" ? "preparation."
+                                                                       : "probe.";
+    expect_refused(waves, {key, "2147483648", (table + key).c_str()}, check_waves);
+  }
+  auto check_mixture = [](const SceneFile& s, const RunOptions&) { check_mixture_moduli(s); };
+  expect_refused(shipped_scene("mixture_moduli_quick.toml"),
+                 {"gas_relax_time", "2147483648", "preparation.gas_relax_time"}, check_mixture);
+  auto check_continuum = [](const SceneFile& s, const RunOptions&) { check_continuum_fit(s); };
+  expect_refused(shipped_scene("continuum_fit_quick.toml"),
+                 {"diameter_max", "1e308", "shear.diameter_max"}, check_continuum,
+                 shipped_scene_path("continuum_fit_quick.toml"));
+  expect_refused(shipped_scene("continuum_fit_quick.toml"),
+                 {"diameter_max", "1000.0", "shear.diameter_max"}, check_continuum,
+                 shipped_scene_path("continuum_fit_quick.toml"));
+  // A walled box 2^31 mm wide asked the neighbour grid for more cells than memory holds.
+  auto check_confined = [](const SceneFile& s, const RunOptions& o) {
+    RunOptions c = o;
+    c.check_only = true;
+    run_confined_compression(s, c);
+  };
+  expect_refused(shipped_scene("confined_compression_quick.toml"),
+                 {"size", "[100.0, 2147483648.0, 110.0]", "box.size"}, check_confined);
+}

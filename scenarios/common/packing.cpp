@@ -91,19 +91,20 @@ HostParticles random_gas(const GasSpec& s, PeriodicBox& box) {
   return h;
 }
 
-void check_gas(const SceneFile& scene, const GasSpec& g, const std::string& phi_key) {
-  scene.require(g.diameter_min > 0, "particles.diameter_min", "must be positive");
-  scene.require(g.diameter_max >= g.diameter_min && g.diameter_max <= 100 * g.diameter_min,
-                "particles.diameter_max",
-                "must lie between particles.diameter_min and 100 times it (the neighbour grid "
-                "is sized by the largest particle)");
-  scene.require(g.density > 0, "particles.density", "must be positive");
-  scene.require(g.speed >= 0, "particles.initial_speed", "must not be negative");
+void check_gas(const SceneFile& scene, const GasSpec& g, const std::string& phi_key,
+               const std::string& table) {
+  const std::string dmin = table + ".diameter_min", dmax = table + ".diameter_max";
+  scene.require(g.diameter_min > 0, dmin, "must be positive");
+  scene.require(g.diameter_max >= g.diameter_min && g.diameter_max <= 100 * g.diameter_min, dmax,
+                "must lie between " + dmin +
+                    " and 100 times it (the neighbour grid is sized by the largest particle)");
+  scene.require(g.density > 0, table + ".density", "must be positive");
+  scene.require(g.speed >= 0, table + ".initial_speed", "must not be negative");
   scene.require(g.phi >= 1e-3 && g.phi <= kMaxGasFraction, phi_key,
                 "must lie in [0.001, 0.45]: random insertion jams above");
   // The box edge (N V_max / phi)^(1/3) and its volume must stay finite.
   const double v_max = M_PI / 6 * g.diameter_max * g.diameter_max * g.diameter_max;
-  scene.require(std::isfinite(v_max * g.count / g.phi), "particles.diameter_max",
+  scene.require(std::isfinite(v_max * g.count / g.phi), dmax,
                 "is too large: the box volume overflows");
 }
 

@@ -25,10 +25,11 @@ constexpr double kMaxGasFraction = 0.45;
 // Throws InputError when the requested volume fraction cannot be reached by insertion.
 HostParticles random_gas(const GasSpec& spec, PeriodicBox& box);
 
-// Checks a gas read from `scene` under the keys particles.{diameter_min, diameter_max,
+// Checks a gas read from `scene` under the keys <table>.{diameter_min, diameter_max,
 // density, initial_speed} and `phi_key`, before anything is allocated: sizes and density
 // positive, a size ratio the neighbour grid can hold (<= 100), a box the doubles can
-// measure, and a volume fraction in [1e-3, 0.5] (random insertion jams beyond).
-void check_gas(const SceneFile& scene, const GasSpec& gas, const std::string& phi_key);
+// measure, and a volume fraction in [1e-3, 0.45] (random insertion jams beyond).
+void check_gas(const SceneFile& scene, const GasSpec& gas, const std::string& phi_key,
+               const std::string& table = "particles");
 
 }  // namespace granular

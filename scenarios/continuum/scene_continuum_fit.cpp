@@ -104,12 +104,9 @@ Setup read_setup(const SceneFile& scene) {
     d.strain_rate = scene.real("shear.strain_rate");
     d.samples = scene.small_integer("shear.samples");
     scene.require(d.gas.count >= 10, "shear.count", "must be at least 10");
-    scene.require(d.gas.phi > 0 && d.gas.phi <= kMaxGasFraction, "shear.phi_gas",
-                  "must be in (0, 0.45]: random insertion jams above");
-    scene.require(d.gas.diameter_min > 0, "shear.diameter_min", "must be positive");
-    scene.require(d.gas.diameter_max >= d.gas.diameter_min, "shear.diameter_max",
-                  "must be at least shear.diameter_min");
-    scene.require(d.gas.density > 0, "shear.density", "must be positive");
+    // The gas rule every scene uses (sizes, size ratio, a box the doubles can measure): a
+    // check of its own here let diameter_max = 1e308 through to a segmentation fault.
+    check_gas(scene, d.gas, "shear.phi_gas", "shear");
     scene.require(d.phi > d.gas.phi && d.phi < 0.9, "shear.phi",
                   "must lie in (shear.phi_gas, 0.9)");
     scene.require(d.strain > 0 && d.strain < 0.2, "shear.strain", "must lie in (0, 0.2)");

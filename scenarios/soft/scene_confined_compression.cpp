@@ -71,6 +71,11 @@ Setup read_setup(const SceneFile& s) {
   c.experiment_strain = s.real("compression.experiment_strain", -1.0);
   c.models = read_soft_models(s, c.mats);
   s.require(c.fill.diameter_mean > 0, "fill.diameter_mean", "must be positive");
+  // The neighbour grid spans the box in cells of about a diameter: a box edge of 2^31 mm
+  // asked for more cells than memory holds (std::bad_alloc).
+  for (int d = 0; d < 3; ++d)
+    s.require(c.size[d] <= 1000 * c.fill.diameter_mean, "box.size",
+              "must be at most 1000 particle diameters (fill.diameter_mean) along each axis");
   s.require(c.fill.diameter_spread >= 0 && c.fill.diameter_spread < 1, "fill.diameter_spread",
             "must lie in [0, 1)");
   s.require(c.region_height >= c.size[2], "fill.region_height", "must reach the box height");

@@ -164,6 +164,8 @@ Setup read_setup(const SceneFile& s) {
   u.params.max_overlap = s.real("run.max_overlap", 0.3);
   u.params.rattler_threshold = s.small_integer("run.rattler_threshold", 4);
   s.require(u.params.dt > 0, "run.dt", "must be positive");
+  s.require(u.gas_relax_time / u.params.dt <= 1e8, "preparation.gas_relax_time",
+            "must be at most 1e8 time steps of run.dt (hours on one core)");
   s.require(u.params.skin > 0, "run.skin", "must be positive");
   s.require(u.params.max_overlap > 0 && u.params.max_overlap < 0.5, "run.max_overlap",
             "must lie in (0, 0.5)");

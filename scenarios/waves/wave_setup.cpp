@@ -1,6 +1,7 @@
 #include "scenarios/waves/wave_setup.hpp"
 
 #include <cmath>
+#include <utility>
 
 namespace granular {
 
@@ -121,6 +122,18 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.dt_check = s.reals("run.dt_check", {});
   s.require(w.dt > 0, "run.dt", "must be positive");
   s.require(w.max_overlap > 0 && w.max_overlap < 0.5, "run.max_overlap", "must lie in (0, 0.5)");
+  // Each phase at most 1e8 steps (hours on one core; the full scene's longest is 4e6): a
+  // duration of 2^31 us ran for years.
+  const std::pair<const char*, double> phases[] = {
+      {"preparation.relax_time", w.relax_time},
+      {"preparation.max_time", w.max_time},
+      {"preparation.final_relax_time", w.final_relax_time},
+      {"pulse.record_time", w.record_time},
+      {"probe.ramp_time", w.probe_ramp},
+      {"probe.hold_time", w.probe_hold},
+      {"probe.damping_time", w.probe_damping_time}};
+  for (const auto& [key, t] : phases)
+    s.require(t / w.dt <= 1e8, key, "must be at most 1e8 time steps of run.dt");
   for (double f : w.dt_check)
     s.require(f >= 0.01 && f <= 1, "run.dt_check", "factors in [0.01, 1] (a run per factor)");
   w.restitution_check = s.reals("run.restitution_check", {});
