@@ -3,11 +3,26 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <sstream>
 
 #include "core/ensemble.hpp"
+#include "core/error.hpp"
 
 namespace granular {
+
+namespace {
+double budget_seconds = 72 * 3600.0;
+}
+
+void Progress::set_budget_hours(double hours) { budget_seconds = hours * 3600.0; }
+double Progress::budget_hours() { return budget_seconds / 3600.0; }
+
+bool Progress::over_budget(double elapsed, long step, long total, double budget) {
+  if (!(budget > 0) || step < 1 || elapsed < std::min(30.0, 0.1 * budget)) return false;
+  return elapsed * static_cast<double>(total) / static_cast<double>(step) > budget;
+}
 
 Progress::Progress(std::string phase, long total_steps, bool enabled)
     : phase_(ensemble::prefix() + std::move(phase)),
@@ -21,8 +36,21 @@ Progress::Progress(std::string phase, long total_steps, bool enabled)
 Progress::~Progress() { finish(); }
 
 void Progress::update(long step, const std::string& extra) {
-  if (!enabled_ || done_) return;
+  if (done_) return;
   const auto now = std::chrono::steady_clock::now();
+  const double spent = std::chrono::duration<double>(now - start_).count();
+  if (over_budget(spent, step, total_, budget_seconds)) {
+    done_ = true;
+    std::ostringstream m;
+    m.precision(3);
+    m << "phase '" << phase_ << "' is projected to take " << spent * total_ / step / 3600.0
+      << " h on this machine (step " << step << " of " << total_ << " after " << spent
+      << " s), beyond the run's budget of " << budget_seconds / 3600.0
+      << " h: shorten the phase (its duration or step count in the scene file), or raise "
+         "--max-hours (0: no limit)";
+    throw PhysicsError(m.str());
+  }
+  if (!enabled_) return;
   const int decile = static_cast<int>(10 * step / total_);
   if (tty_) {
     if (now - last_draw_ < std::chrono::milliseconds(250) && step < total_) return;

@@ -203,6 +203,7 @@ class DemSystem {
     // Multi-contact laws act between the two passes, which need the per-contact forces.
     size_pair_buffer(two_pass() || mc.mode != MultiContact::None, mc.mode != MultiContact::None);
     mc_.configure(mc, p_, nl_, walls_.size(), pair_.extent(0));
+    check_time_step();
     initial_forces();
   }
   const MultiContact& multicontact() const { return mc_.options(); }
@@ -300,9 +301,14 @@ class DemSystem {
           << "): the integration diverged; reduce dt (now " << params_.dt << ")";
       throw PhysicsError(msg.str());
     }
-    if (m.max_overlap > params_.max_overlap) {
+    // MC-strain: the pair law sees the corrected overlap, and the time-step guard assumed
+    // the limit for it as well.
+    const double corrected = mc_.max_corrected_overlap(p_, nl_);
+    if (m.max_overlap > params_.max_overlap || corrected > params_.max_overlap) {
       msg << "runaway overlap at t = " << time_ << " (step " << steps_
-          << "): delta/a = " << m.max_overlap << " exceeds the limit " << params_.max_overlap
+          << "): delta/a = " << std::max(m.max_overlap, corrected)
+          << (corrected > m.max_overlap ? " (MC-strain's corrected overlap)" : "")
+          << " exceeds the limit " << params_.max_overlap
           << " of binary contact laws; reduce the strain rate, the final volume fraction, the"
           << " initial velocities or dt";
       // MC-strain takes the other contacts' forces of the previous step: under load its
@@ -643,12 +649,20 @@ class DemSystem {
     for (const WallSpec& w : walls_.specs())
       for (int a = 0; a < kMaxSpecies; ++a)
         if (light[a][0] < none) guard(a, w.material, light[a][0]);
+    // A multi-contact law stiffens the contacts beyond the pair law (multicontact.hpp).
+    const double stiffer = stiffness_factor(mc_.options(), params_.max_overlap);
+    tc /= std::sqrt(stiffer), k_worst *= stiffer;
     if (params_.dt > params_.dt_guard * tc) {
       std::ostringstream msg;
       msg.precision(4);
       msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard << " = "
           << params_.dt_guard * tc << " for the stiffest, lightest contact of the scene (stiffness "
-          << k_worst << ", reduced mass " << m_worst << ", contact duration " << tc << "): ";
+          << k_worst << ", reduced mass " << m_worst << ", contact duration " << tc;
+      if (stiffer > 1)
+        msg << ", with MC-stress's allowance of " << stiffer
+            << " x the pair law's stiffness for beta = " << mc_.options().beta
+            << " and the overlap limit " << params_.max_overlap;
+      msg << "): ";
       if (params_.dt_hint.empty())
         msg << "set " << params_.dt_key << " <= " << params_.dt_guard * tc
             << " (t_c/50 = " << tc / 50 << " is the usual choice)";

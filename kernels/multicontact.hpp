@@ -8,6 +8,7 @@
 // kernels, and every kernel here is compiled for one law only.
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -56,6 +57,28 @@ struct MultiContact {
     }
   }
 };
+
+// The time-step guard's allowance for MC-stress (docs/model_multicontact.md §6): how much stiffer
+// than its pair law a contact can be. Contact c of particles i and j gains
+//   beta nu pi R* delta_c f (T_i / V_i + T_j / V_j),  f = 1/3 (1/6 with `mean`),
+// T the sum of lever x normal force over the particle's other contacts. Bounded with R* <= a,
+// levers <= a, every contact at the largest overlap delta = mu a and carrying the Hertz force
+// (2/3) k delta, its derivatives sum (a row of the contact Jacobian) to
+//   by its own overlap, through the area:          beta nu f mu (Z - 1) k
+//   by the 2 (Z - 1) other overlaps, through T:    (3/2) beta nu f mu (Z - 1) k
+// against k for the pair law alone (Gershgorin). Z = 12, the kissing number of equal spheres;
+// with `own_contact` the pair's own term counts as one more. MC-strain adds no instantaneous
+// stiffness: its correction uses the previous step's forces, and the pair law is evaluated at
+// the corrected overlap, which the run keeps below max_overlap (DemSystem::check_health).
+inline double stiffness_factor(const MultiContact& mc, double max_overlap) {
+  if (mc.mode != MultiContact::Stress) return 1.0;
+  constexpr double kissing = 12;
+  double nu = 0;
+  for (double v : mc.poisson) nu = std::max(nu, v);
+  const double f = mc.mean ? 1.0 / 6.0 : 1.0 / 3.0;
+  const double others = mc.own_contact ? kissing : kissing - 1;
+  return 1.0 + 2.5 * mc.beta * nu * f * max_overlap * others;
+}
 
 // Extra overlap at contact c of a particle caused by the normal force f_k at its contact k
 // (MC-strain):
@@ -411,6 +434,44 @@ class MultiContactForces {
               wall(i, (qc - ne) * C + kWCorr) = sum;
           }
         });
+  }
+
+  // MC-strain: the largest overlap the pair law saw at the last force evaluation, corrected,
+  // over the smaller radius (walls: the particle's), the measure the overlap limit applies to;
+  // 0 under the other laws. The time-step guard assumes the limit holds for this overlap too.
+  double max_corrected_overlap(const Particles<ExecSpace>& p,
+                               const NeighborList<ExecSpace>& nl) const {
+    using namespace multicontact;
+    if (opt_.mode != MultiContact::Strain) return 0.0;
+    auto offsets = nl.offsets(), neighbors = nl.neighbors(), mirror = nl.mirror();
+    auto owned_end = nl.owned_end();
+    auto entry = entry_, wall = wall_;
+    auto radius = p.radius;
+    const int nmc =
+        wall_.extent(0) > 0 ? static_cast<int>(wall_.extent(1)) / kStrainWallColumns : 0;
+    double worst = 0.0;
+    Kokkos::parallel_reduce(
+        "dem::multicontact::max_corrected_overlap", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+        KOKKOS_LAMBDA(const int i, double& m) {
+          constexpr int C = kStrainWallColumns;
+          const double ai = radius(i);
+          for (int k = offsets(i); k < owned_end(i); ++k) {
+            const double lever = entry(k, kSLever);
+            if (lever == 0.0) continue;  // not touching
+            const double aj = radius(neighbors(k));
+            const double delta = 2.0 * (ai - lever) + entry(k, kSCorr) + entry(mirror(k), kSCorr);
+            const double r = delta / (ai < aj ? ai : aj);
+            if (r > m) m = r;
+          }
+          for (int w = 0; w < nmc; ++w) {
+            const double lever = wall(i, w * C + kWLever);
+            if (lever == 0.0) continue;
+            const double r = (2.0 * (ai - lever) + wall(i, w * C + kWCorr)) / ai;
+            if (r > m) m = r;
+          }
+        },
+        Kokkos::Max<double>(worst));
+    return worst;
   }
 
   // MC-stress, after the classical pair pass: sum_c l.f per particle (pair entries in list

@@ -7,6 +7,7 @@
 #include "core/ensemble.hpp"
 #include "core/error.hpp"
 #include "core/output.hpp"
+#include "core/progress.hpp"
 #include "core/scene_file.hpp"
 #include "granular_config.hpp"
 #include "kernels/force_slabs.hpp"
@@ -49,6 +50,12 @@ int main(int argc, char** argv) {
   run->add_option("--stop-after-minutes", stop_after_minutes,
                   "stop at the first checkpoint after this wall time (elastic_moduli); "
                   "continue with --resume")
+      ->check(CLI::NonNegativeNumber);
+  double max_hours = granular::Progress::budget_hours();
+  run->add_option("--max-hours", max_hours,
+                  "wall-time budget of each phase: one projected to last longer stops early "
+                  "with the estimate (0: no limit)")
+      ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   run->add_option("--force-slabs", force_slabs,
                   "slabs of the host force pass (default 6; a third of them run at once: with "
@@ -133,6 +140,7 @@ int main(int argc, char** argv) {
     opts.progress = !quiet;
     opts.resume = resume;
     opts.stop_after_minutes = stop_after_minutes;
+    granular::Progress::set_budget_hours(max_hours);
     opts.check_only = checking;
     if (checking) {
       entry.run(scene, opts);

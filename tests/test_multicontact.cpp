@@ -6,6 +6,7 @@
 // carried across neighbour-list rebuilds and particle reordering.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -496,4 +497,148 @@ TYPED_TEST(MultiContactTest, MaterialsOfSpeciesInUseAreValidated) {
   mc = law(MultiContact::Strain);
   mc.young[3] = -1.0;  // species 3 is not in use
   EXPECT_NO_THROW(sys.set_multicontact(mc));
+}
+
+namespace {
+// Stiffness matrix of a cluster (3n x 3n, symmetrised) by central differences of the forces,
+// each displaced state a fresh system: K = -dF/dx.
+template <class Exec>
+Eigen::MatrixXd stiffness_matrix(const HostParticles& h, const PeriodicBox& box,
+                                 const MultiContact* mc, double max_overlap) {
+  const int n = h.size(), m = 3 * n;
+  const double step = 1e-6 * kA;
+  DemParams prm = params(1e-9);  // far below every guard: only the forces are wanted
+  prm.max_overlap = max_overlap;
+  auto force_at = [&](int q, double shift) {
+    HostParticles moved = h;
+    double* coord[3] = {moved.x.data(), moved.y.data(), moved.z.data()};
+    coord[q % 3][q / 3] += shift;
+    DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(moved), box, frictionless(), prm);
+    if (mc) sys.set_multicontact(*mc);
+    return forces(sys);
+  };
+  Eigen::MatrixXd k(m, m);
+  for (int q = 0; q < m; ++q) {
+    const auto plus = force_at(q, step), minus = force_at(q, -step);
+    for (int r = 0; r < m; ++r) k(r, q) = -(plus[r] - minus[r]) / (2 * step);
+  }
+  return 0.5 * (k + k.transpose());
+}
+
+// The centre and its twelve nearest neighbours of a face-centred cubic packing of equal
+// spheres, every touching pair (centre-shell and shell-shell) at overlap `overlap` a.
+HostParticles fcc_cluster(double overlap) {
+  const double spacing = (2.0 - overlap) * kA / std::sqrt(2.0);  // half the cube's face diagonal
+  std::vector<std::array<double, 5>> rows{{0, 0, 0, kA, 0}};
+  for (int a = 0; a < 3; ++a)
+    for (const int s1 : {-1, 1})
+      for (const int s2 : {-1, 1}) {
+        std::array<double, 5> r{0, 0, 0, kA, 0};
+        r[(a + 1) % 3] = s1 * spacing, r[(a + 2) % 3] = s2 * spacing;
+        rows.push_back(r);
+      }
+  return particles(rows);
+}
+
+// The largest time step the guard accepts for a system: bisection on the refusal.
+template <class Exec>
+double largest_accepted_dt(const HostParticles& h, const PeriodicBox& box, const MultiContact* mc) {
+  double lo = 1e-12, hi = 1e-2;
+  for (int it = 0; it < 60; ++it) {
+    const double dt = std::sqrt(lo * hi);
+    try {
+      DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(h), box, frictionless(), params(dt));
+      if (mc) sys.set_multicontact(*mc);
+      lo = dt;
+    } catch (const PhysicsError&) {
+      hi = dt;
+    }
+  }
+  return lo;
+}
+}  // namespace
+
+TYPED_TEST(MultiContactTest, StressStiffeningOfADenseClusterStaysWithinTheTimeStepAllowance) {
+  using Exec = TypeParam;
+  // The stiffest mode of a 13-sphere fcc cluster at overlap mu a, by brute force, under MC-stress
+  // against classical Hertz: the ratio must stay below the guard's allowance, and be above 1
+  // (the allowance guards a real stiffening).
+  const double mu = 0.3;
+  const HostParticles h = fcc_cluster(mu);
+  const PeriodicBox box = open_box(-5 * kA, 10 * kA);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> classical(
+      stiffness_matrix<Exec>(h, box, nullptr, mu), Eigen::EigenvaluesOnly);
+  for (const double beta : {1.65, 10.0}) {
+    for (const bool own : {false, true}) {
+      MultiContact mc = law(MultiContact::Stress);
+      mc.beta = beta, mc.own_contact = own;
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> corrected(
+          stiffness_matrix<Exec>(h, box, &mc, mu), Eigen::EigenvaluesOnly);
+      const double ratio = corrected.eigenvalues().maxCoeff() / classical.eigenvalues().maxCoeff();
+      const double allowance = stiffness_factor(mc, mu);
+      ::testing::Test::RecordProperty(
+          "beta_" + std::to_string(beta) + (own ? "_own" : "") + "_ratio_allowance",
+          std::to_string(ratio) + " " + std::to_string(allowance));
+      EXPECT_GT(ratio, 1.0 + 0.1 * (allowance - 1.0)) << "beta " << beta << " own " << own;
+      EXPECT_LE(ratio, allowance) << "beta " << beta << " own " << own;
+    }
+  }
+}
+
+TYPED_TEST(MultiContactTest, TimeStepGuardAllowsForStressStiffeningOnly) {
+  using Exec = TypeParam;
+  const HostParticles h = fcc_cluster(0.1);
+  const PeriodicBox box = open_box(-5 * kA, 10 * kA);
+  const double classical = largest_accepted_dt<Exec>(h, box, nullptr);
+  MultiContact stress = law(MultiContact::Stress);
+  stress.beta = 10.0;
+  const double factor = stiffness_factor(stress, DemParams().max_overlap);
+  ASSERT_GT(factor, 2.0);
+  // The stress law's limit is the classical one over sqrt(allowance), to the bisection's width.
+  EXPECT_NEAR(largest_accepted_dt<Exec>(h, box, &stress) * std::sqrt(factor) / classical, 1.0,
+              1e-9);
+  // MC-strain adds no instantaneous stiffness (its run-time overlap check covers it).
+  const MultiContact strain = law(MultiContact::Strain);
+  EXPECT_NEAR(largest_accepted_dt<Exec>(h, box, &strain) / classical, 1.0, 1e-9);
+  // The refusal says why.
+  DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(h), box, frictionless(),
+                             params(0.9 * classical));
+  try {
+    sys.set_multicontact(stress);
+    ADD_FAILURE() << "dt above the MC-stress limit accepted";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("MC-stress"), std::string::npos) << e.what();
+  }
+}
+
+TYPED_TEST(MultiContactTest, StrainCorrectedOverlapBeyondTheLimitStopsTheRun) {
+  using Exec = TypeParam;
+  // Three spheres in a row, each contact at 0.2 a: the middle one's opposite contacts press
+  // each other deeper under MC-strain. Below the limit the state passes; with the limit
+  // between the geometric and the corrected overlap, it stops, naming MC-strain.
+  const double delta = 0.2 * kA;
+  const HostParticles h = particles(
+      {{0, 0, 0, kA, 0}, {2 * kA - delta, 0, 0, kA, 0}, {4 * kA - 2 * delta, 0, 0, kA, 0}});
+  const PeriodicBox box = open_box(-5 * kA, 10 * kA);
+  MultiContact mc = law(MultiContact::Strain);
+  mc.gamma = 5.0;
+  for (const double limit : {0.6, 0.21}) {
+    DemParams prm = params();
+    prm.max_overlap = limit;
+    DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(h), box, frictionless(), prm);
+    sys.set_multicontact(mc);
+    const Measurements m = sys.measure();
+    ASSERT_NEAR(m.max_overlap, 0.2, 1e-9);
+    if (limit > 0.5) {
+      EXPECT_NO_THROW(sys.check_health(m));
+    } else {
+      try {
+        sys.check_health(m);
+        ADD_FAILURE() << "corrected overlap beyond the limit passed";
+      } catch (const PhysicsError& e) {
+        EXPECT_NE(std::string(e.what()).find("MC-strain's corrected overlap"), std::string::npos)
+            << e.what();
+      }
+    }
+  }
 }

@@ -1,11 +1,15 @@
 // Physical-safety guards: a time step beyond t_c/10 of the stiffest, lightest pair is
 // refused with the limit in the message; a run driven into huge overlaps is stopped.
-// And output files: an unfinished HDF5 file never appears under its final name.
+// And output files: an unfinished HDF5 file never appears under its final name. A phase
+// projected past the run's wall-time budget stops with the estimate.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "core/output.hpp"
+#include "core/progress.hpp"
 #include "kernels/contact_model.hpp"
 #include "kernels/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
@@ -131,4 +135,40 @@ TEST(SafetyGuards, StiffRollingOrTorsionSpringAndFastRollingDashpotAreRefused) {
       EXPECT_NE(std::string(e.what()).find("dt"), std::string::npos) << e.what();
     }
   }
+}
+
+TEST(WallTimeBudget, ProjectionIsJudgedOnlyOnceTheRateIsMeasured) {
+  const double hour = 3600;
+  EXPECT_FALSE(Progress::over_budget(10, 1, 1000, hour));    // too early: 30 s not yet spent
+  EXPECT_TRUE(Progress::over_budget(40, 1, 1000, hour));     // 40 000 s projected
+  EXPECT_FALSE(Progress::over_budget(40, 500, 1000, hour));  // 80 s projected
+  EXPECT_FALSE(Progress::over_budget(1e6, 1, 1000, 0));      // no budget
+  EXPECT_FALSE(Progress::over_budget(40, 0, 1000, hour));    // no step yet: no rate
+  // A short budget is judged after a tenth of it.
+  EXPECT_TRUE(Progress::over_budget(0.2, 1, 1000, 1.0));
+  EXPECT_FALSE(Progress::over_budget(0.05, 1, 1000, 1.0));
+}
+
+TEST(WallTimeBudget, PhaseProjectedPastTheBudgetStopsWithTheEstimateEvenWithoutProgressLines) {
+  const double kept = Progress::budget_hours();
+  Progress::set_budget_hours(1e-6);  // 3.6 ms, judged after 0.36 ms
+  {
+    Progress p("long phase", 1000000, false);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    try {
+      p.update(1);
+      ADD_FAILURE() << "a phase of about 1.4 h passed a budget of 3.6 ms";
+    } catch (const PhysicsError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("'long phase'"), std::string::npos) << what;
+      EXPECT_NE(what.find("--max-hours"), std::string::npos) << what;
+    }
+  }
+  Progress::set_budget_hours(0);  // none: the same phase goes on
+  {
+    Progress p("long phase", 1000000, false);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    EXPECT_NO_THROW(p.update(1));
+  }
+  Progress::set_budget_hours(kept);
 }

@@ -13,7 +13,9 @@ with h5py.File(h5, "r") as f:
         g = f["runs"][model]
         note = f"{g.attrs['wall_seconds']:.1f} s"
         if "failure" in g.attrs:  # the model broke down: its curve ends there
-            note = f"diverged at {g['strain'][-1] * 100:.1f} %"
+            failure = str(g.attrs["failure"])
+            how = "overlap limit" if failure.startswith("runaway overlap") else "diverged"
+            note = f"{how} at {g['strain'][-1] * 100:.1f} %"
         ax.plot(g["strain"][:] * 100, g["top_wall_force"][:], lw=1.1, label=f"{model} ({note})")
     fx, sx = f.attrs["experiment_max_force"], f.attrs["experiment_strain"]
     if fx > 0:

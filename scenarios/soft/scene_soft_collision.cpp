@@ -42,7 +42,11 @@ Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, i
   PeriodicBox box;
   for (int d = 0; d < 3; ++d) box.lo[d] = -8 * a, box.len[d] = 16 * a, box.periodic[d] = false;
   DemParams prm;
-  prm.dt = dt, prm.skin = 0.2 * a, prm.max_overlap = 0.9, prm.sort = false;
+  // The source's rubber collisions at 10 m/s press classical Hertz to 0.89 a, and MC-strain's
+  // pair law sees corrected overlaps of 1.21-1.25 a (measured; geometric at most 0.79 a): Hertz
+  // far past its range, as in the source's runs. The limit sits above both; the time-step
+  // guard evaluates the stiffness there.
+  prm.dt = dt, prm.skin = 0.2 * a, prm.max_overlap = 1.3, prm.sort = false;
   DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
   if (mc.mode != MultiContact::None) sys.set_multicontact(mc);
   std::vector<double> t, ekin, overlap;
