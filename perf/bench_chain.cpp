@@ -10,9 +10,9 @@
 #include <iostream>
 #include <random>
 
-#include "core/chain_exact.hpp"
-#include "core/master_equation.hpp"
-#include "kernels/chain_energy.hpp"
+#include "core/chain/chain_exact.hpp"
+#include "core/chain/master_equation.hpp"
+#include "kernels/chain/chain_energy.hpp"
 #include "machine_info.hpp"
 
 using namespace granular;

@@ -23,12 +23,12 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/output.hpp"
-#include "core/rng.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
+#include "core/run/rng.hpp"
 #include "dense_packing.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "machine_info.hpp"
 
 using namespace granular;

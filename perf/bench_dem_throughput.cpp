@@ -55,12 +55,12 @@
 #include <vector>
 
 #include "allocation_tracker.hpp"
-#include "core/error.hpp"
-#include "core/lammps_data.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/lammps/lammps_data.hpp"
+#include "core/run/error.hpp"
 #include "dense_packing.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "machine_info.hpp"
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/dem_output.hpp"
@@ -426,7 +426,7 @@ int main(int argc, char** argv) {
           }
           // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
           // written): the closing kick of each step is deferred into the next one.
-          // With the packed records (kernels/particle_pack.hpp), the pass also reads the radius
+          // With the packed records (kernels/cpu/particle_pack.hpp), the pass also reads the radius
           // and writes a 96-byte record, and the force pass reads the record's 96 bytes where
           // it read the 80 of position, radius, velocity and spin.
           const double pack_bytes = packed_reads > 0 ? (8 + 96) + (96 - 80) : 0.0;

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "machine_info.hpp"
 
 using namespace granular;

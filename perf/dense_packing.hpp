@@ -7,9 +7,9 @@
 #include <iostream>
 #include <string>
 
-#include "core/output.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
 

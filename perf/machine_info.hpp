@@ -7,7 +7,7 @@
 #include <string>
 #include <thread>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 
 namespace granular::perf {
 

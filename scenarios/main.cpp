@@ -4,13 +4,13 @@
 #include <filesystem>
 #include <iostream>
 
-#include "core/ensemble.hpp"
-#include "core/error.hpp"
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "core/scene_file.hpp"
+#include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/error.hpp"
+#include "core/run/progress.hpp"
 #include "granular_config.hpp"
-#include "kernels/force_slabs.hpp"
+#include "kernels/cpu/force_slabs.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"

@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <system_error>
 
-#include "core/ensemble.hpp"
-#include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/scene_file.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

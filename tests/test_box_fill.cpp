@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "core/error.hpp"
+#include "core/run/error.hpp"
 #include "scenarios/common/box_fill.hpp"
 
 using namespace granular;

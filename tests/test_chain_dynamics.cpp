@@ -7,10 +7,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/chain_exact.hpp"
-#include "core/output.hpp"
+#include "core/chain/chain_exact.hpp"
+#include "core/io/output.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/chain_energy.hpp"
+#include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"

@@ -5,7 +5,7 @@
 #include <complex>
 
 #include "exec_spaces.hpp"
-#include "kernels/chain_energy.hpp"
+#include "kernels/chain/chain_energy.hpp"
 
 using namespace granular;
 

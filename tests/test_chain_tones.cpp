@@ -8,7 +8,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"
 

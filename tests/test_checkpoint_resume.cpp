@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
-#include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"
 

@@ -1,4 +1,4 @@
-// Batched contact evaluation (kernels/contact_batch.hpp) against the scalar law: lane by
+// Batched contact evaluation (kernels/cpu/contact_batch.hpp) against the scalar law: lane by
 // lane on hand-made contacts that take every branch (sticking and sliding springs, an
 // empty spring, a spring far out of the tangent plane, infinite friction at zero normal
 // force, a tensile normal force, no tangential stiffness); and against the contact-by-
@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_batch.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/cpu/contact_batch.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 #include "test_support.hpp"
 

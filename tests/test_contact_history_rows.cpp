@@ -13,9 +13,9 @@
 #include <filesystem>
 #include <utility>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 #include "tests/test_support.hpp"
 

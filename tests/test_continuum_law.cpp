@@ -6,9 +6,9 @@
 #include <cmath>
 #include <limits>
 
-#include "core/deformation_paths.hpp"
-#include "core/error.hpp"
-#include "core/material_point.hpp"
+#include "core/continuum/deformation_paths.hpp"
+#include "core/continuum/material_point.hpp"
+#include "core/run/error.hpp"
 
 using namespace granular;
 

@@ -1,4 +1,4 @@
-// kernels/deterministic_sum.hpp: sums that do not depend on the thread count, and the
+// kernels/dem/deterministic_sum.hpp: sums that do not depend on the thread count, and the
 // chunked form the device's measurements use (a table of 1M rows at a time instead of one row
 // per particle) giving the same bits as one table.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <random>
 
 #include "exec_spaces.hpp"
-#include "kernels/deterministic_sum.hpp"
+#include "kernels/dem/deterministic_sum.hpp"
 
 namespace granular {
 namespace {

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
+#include "kernels/contact/contact_model.hpp"
 #include "scenarios/common/element_test.hpp"
 
 using namespace granular;

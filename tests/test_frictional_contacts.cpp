@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "exec_spaces.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 #include "scenarios/common/packing.hpp"
 

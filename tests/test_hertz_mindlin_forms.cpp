@@ -12,8 +12,8 @@
 #include <cmath>
 #include <limits>
 
-#include "kernels/contact_model.hpp"
-#include "kernels/species_mixing.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/contact/species_mixing.hpp"
 
 using namespace granular;
 

@@ -9,13 +9,13 @@
 #include <limits>
 #include <tuple>
 
-#include "core/error.hpp"
-#include "core/finite.hpp"
-#include "core/output.hpp"
-#include "core/restitution.hpp"
+#include "core/dem/restitution.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
+#include "core/run/finite.hpp"
 #include "exec_spaces.hpp"
 #include "granular_config.hpp"
-#include "kernels/contact_model.hpp"
+#include "kernels/contact/contact_model.hpp"
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
 #include "scenarios/scene_registry.hpp"

@@ -1,5 +1,5 @@
 // The host kick-drift pass four particles at a time (KickDriftRows::run_avx2 in
-// kernels/integrator.hpp) against the particle-by-particle pass (run): the same bits of
+// kernels/dem/integrator.hpp) against the particle-by-particle pass (run): the same bits of
 // positions, velocities, forces, spins and torques, the same largest squared displacement and
 // drift speed, for every combination of the pass's switches, with particles wrapped through
 // periodic faces in both directions, displacements folded by the minimum image, a NaN
@@ -15,9 +15,9 @@
 #include <limits>
 #include <vector>
 
-#include "core/rng.hpp"
+#include "core/run/rng.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/integrator.hpp"
+#include "kernels/dem/integrator.hpp"
 #include "test_support.hpp"
 
 using namespace granular;

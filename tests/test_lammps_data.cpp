@@ -9,10 +9,10 @@
 #include <fstream>
 #include <string>
 
-#include "core/error.hpp"
-#include "core/lammps_data.hpp"
-#include "core/particles.hpp"
-#include "kernels/contact_state.hpp"
+#include "core/dem/particles.hpp"
+#include "core/lammps/lammps_data.hpp"
+#include "core/run/error.hpp"
+#include "kernels/contact/contact_state.hpp"
 
 using namespace granular;
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <string>
 
-#include "core/error.hpp"
-#include "core/lammps_forces.hpp"
+#include "core/lammps/lammps_forces.hpp"
+#include "core/run/error.hpp"
 #include "granular_config.hpp"
 
 using namespace granular;

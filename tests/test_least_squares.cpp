@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "core/least_squares.hpp"
+#include "core/continuum/least_squares.hpp"
 
 using namespace granular;
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <utility>
 
-#include "core/master_equation.hpp"
+#include "core/chain/master_equation.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/chain_energy.hpp"
+#include "kernels/chain/chain_energy.hpp"
 
 using namespace granular;
 

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.hpp"
-#include "core/scene_file.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/run/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/moduli/moduli_setup.hpp"
 #include "scenarios/scene_registry.hpp"

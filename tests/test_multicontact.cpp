@@ -13,10 +13,10 @@
 #include <random>
 #include <vector>
 
-#include "core/walls.hpp"
+#include "core/dem/walls.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/dem_system.hpp"
-#include "kernels/multicontact.hpp"
+#include "kernels/dem/dem_system.hpp"
+#include "kernels/dem/multicontact.hpp"
 
 using namespace granular;
 

@@ -1,10 +1,10 @@
-// The near list of the host one-pass kernel (NearRows in kernels/contact_forces.hpp): the
+// The near list of the host one-pass kernel (NearRows in kernels/dem/contact_forces.hpp): the
 // force passes that read only the owned entries within the near skin give the trajectory of
 // the passes that read whole rows, bit for bit, for every host law path (frictionless contact
 // by contact, frictional in batches and contact by contact, rolling springs), through
 // neighbour rebuilds and through recordings forced by particles that move more than half the
 // near skin; and a run cut into calls too short for the near list (which then reads whole
-// rows) ends on the same bits. The near list's stream (kernels/near_stream.hpp) gives the
+// rows) ends on the same bits. The near list's stream (kernels/cpu/near_stream.hpp) gives the
 // bits of the near rows, batched frictional and frictionless contact by contact, signed
 // zeros of rows without near entries included, and leaves laws with several parameter sets
 // to the rows; the frictional stream gives the same bits from the particles' packed records
@@ -14,10 +14,10 @@
 #include <cmath>
 #include <vector>
 
-#include "core/rng.hpp"
+#include "core/run/rng.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 #include "test_support.hpp"
 

@@ -10,14 +10,14 @@
 #include <set>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/output.hpp"
-#include "core/rng.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
+#include "core/run/rng.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
-#include "kernels/neighbor_list.hpp"
-#include "kernels/strain.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
+#include "kernels/dem/neighbor_list.hpp"
+#include "kernels/dem/strain.hpp"
 #include "scenarios/common/packing.hpp"
 #include "tests/test_support.hpp"
 
@@ -330,7 +330,7 @@ TYPED_TEST(NeighborListTest, CrowdedParticleBeyondTheRowCapacityIsListedExactly)
 }
 
 // With the particles stored in cell order (DemSystem's sorting), host builds test four
-// candidates at a time (kernels/neighbor_sweep.hpp). The list must be the scalar sweep's,
+// candidates at a time (kernels/cpu/neighbor_sweep.hpp). The list must be the scalar sweep's,
 // entry for entry (the force sums follow its order), and the brute-force set: in a periodic
 // and a walled box, with a particle count that leaves a partial vector at the array's end, and
 // with a crowded particle whose row outgrows the build's scratch.
@@ -382,7 +382,7 @@ TYPED_TEST(NeighborListTest, VectorSweepInCellOrderListsTheScalarSweepsEntriesIn
     }
 }
 
-#include "kernels/strain_modes.hpp"
+#include "kernels/dem/strain_modes.hpp"
 
 // A checkpoint's list with an index out of range is refused on load, naming its group,
 // instead of being read out of bounds on the first force pass (a segfault before).

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "exec_spaces.hpp"
-#include "kernels/measure.hpp"
+#include "kernels/dem/measure.hpp"
 
 using namespace granular;
 

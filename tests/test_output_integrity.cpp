@@ -19,8 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
+#include "scenarios/common/charts.hpp"
 
 using namespace granular;
 namespace fs = std::filesystem;

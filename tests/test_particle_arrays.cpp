@@ -7,8 +7,8 @@
 #include <utility>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 
 using namespace granular;

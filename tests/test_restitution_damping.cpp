@@ -11,9 +11,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/restitution.hpp"
+#include "core/dem/restitution.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/species_mixing.hpp"
+#include "kernels/contact/species_mixing.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;
@@ -179,7 +179,7 @@ TYPED_TEST(HertzRestitutionCollisionTest, MeasuredRestitutionEqualsInputAtEveryI
 
 // The common DEM mapping gamma_n = 2 sqrt(5/6) beta sqrt(S_n m*), as alpha = sqrt(5) beta:
 // speed independent, the engine reproduces the dimensionless collision for that alpha, and
-// that is the input e itself (the exact transformation in core/restitution.hpp), not an
+// that is the input e itself (the exact transformation in core/dem/restitution.hpp), not an
 // approximation of it. Measured with the time step of the previous test:
 //   input e           0.3       0.6       0.9       0.95
 //   measured v = 0.01 0.29996   0.59999   0.90000   0.95000

@@ -11,8 +11,8 @@
 #include <limits>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 
 using namespace granular;
 

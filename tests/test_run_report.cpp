@@ -10,8 +10,8 @@
 #include <fstream>
 #include <regex>
 
-#include "core/error.hpp"
-#include "core/scene_file.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/run/error.hpp"
 #include "external_program.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"

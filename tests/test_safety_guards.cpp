@@ -8,10 +8,10 @@
 #include <filesystem>
 #include <thread>
 
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 #include "tests/test_support.hpp"
 

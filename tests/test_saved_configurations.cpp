@@ -12,7 +12,7 @@
 #include <limits>
 #include <sstream>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"

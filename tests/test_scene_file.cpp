@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/scene_file.hpp"
+#include "core/io/scene_file.hpp"
 #include "test_support.hpp"
 
 using granular::InputError;

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
+#include "core/run/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"

@@ -10,7 +10,7 @@
 #include <regex>
 #include <sstream>
 
-#include "core/error.hpp"
+#include "core/run/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"

@@ -6,10 +6,10 @@
 
 #include <cmath>
 
-#include "core/signal_pickers.hpp"
-#include "core/spectral_ratio.hpp"
-#include "core/spectrum.hpp"
-#include "core/synthetic_signals.hpp"
+#include "core/signal/signal_pickers.hpp"
+#include "core/signal/spectral_ratio.hpp"
+#include "core/signal/spectrum.hpp"
+#include "core/signal/synthetic_signals.hpp"
 
 using namespace granular;
 

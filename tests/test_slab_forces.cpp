@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/packing.hpp"
 #include "test_support.hpp"
 

@@ -11,10 +11,10 @@
 #include <regex>
 #include <sstream>
 
-#include "core/output.hpp"
-#include "core/scene_file.hpp"
+#include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
 #include "external_program.hpp"
-#include "kernels/contact_model.hpp"
+#include "kernels/contact/contact_model.hpp"
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"

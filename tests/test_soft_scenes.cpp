@@ -12,8 +12,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "tests/test_support.hpp"

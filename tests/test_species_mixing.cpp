@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "exec_spaces.hpp"
-#include "kernels/species_mixing.hpp"
+#include "kernels/contact/species_mixing.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;

@@ -10,9 +10,9 @@
 #include <limits>
 
 #include "exec_spaces.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
-#include "kernels/species_mixing.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/contact/species_mixing.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 
 using namespace granular;

@@ -6,8 +6,8 @@
 #include <Kokkos_Core.hpp>
 #include <filesystem>
 
-#include "core/output.hpp"
-#include "core/particles.hpp"
+#include "core/dem/particles.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "tests/test_support.hpp"
 

@@ -19,10 +19,10 @@
 #include <omp.h>
 #endif
 
-#include "core/scene_file.hpp"
-#include "core/walls.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/dem/walls.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/common/packing.hpp"
 #include "test_support.hpp"

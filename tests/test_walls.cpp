@@ -7,9 +7,9 @@
 #include <cmath>
 #include <limits>
 
-#include "core/walls.hpp"
+#include "core/dem/walls.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/collisions/impact.hpp"
 
 using namespace granular;

@@ -9,11 +9,11 @@
 #include <cmath>
 #include <limits>
 
-#include "core/signal_pickers.hpp"
-#include "core/synthetic_signals.hpp"
+#include "core/signal/signal_pickers.hpp"
+#include "core/signal/synthetic_signals.hpp"
 #include "exec_spaces.hpp"
-#include "kernels/contact_hertz.hpp"
-#include "kernels/dem_system.hpp"
+#include "kernels/contact/contact_hertz.hpp"
+#include "kernels/dem/dem_system.hpp"
 
 using namespace granular;
 

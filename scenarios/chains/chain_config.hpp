@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "core/output.hpp"
-#include "core/scene_file.hpp"
-#include "kernels/chain_batch.hpp"
+#include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/chain/chain_batch.hpp"
 
 namespace granular {
 

@@ -10,11 +10,12 @@
 #include <iostream>
 #include <memory>
 
-#include "core/chain_exact.hpp"
-#include "core/ensemble.hpp"
-#include "core/progress.hpp"
-#include "kernels/chain_energy.hpp"
+#include "core/chain/chain_exact.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"

@@ -12,11 +12,12 @@
 #include <iostream>
 #include <stdexcept>
 
-#include "core/ensemble.hpp"
-#include "core/master_equation.hpp"
-#include "core/progress.hpp"
-#include "kernels/chain_energy.hpp"
+#include "core/chain/master_equation.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 

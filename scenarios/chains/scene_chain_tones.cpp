@@ -12,12 +12,13 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/chain_spectrum.hpp"
-#include "core/master_equation.hpp"
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "kernels/chain_energy.hpp"
+#include "core/chain/chain_spectrum.hpp"
+#include "core/chain/master_equation.hpp"
+#include "core/io/output.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "core/finite.hpp"
-#include "core/walls.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/dem/walls.hpp"
+#include "core/run/finite.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 
 namespace granular {

@@ -6,8 +6,9 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 

@@ -8,11 +8,12 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/finite.hpp"
-#include "core/output.hpp"
-#include "core/restitution.hpp"
+#include "core/dem/restitution.hpp"
+#include "core/io/output.hpp"
+#include "core/run/finite.hpp"
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"

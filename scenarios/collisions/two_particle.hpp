@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/run/error.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
 
 namespace granular {
 

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "core/box.hpp"
-#include "core/host_particles.hpp"
+#include "core/dem/box.hpp"
+#include "core/dem/host_particles.hpp"
 
 namespace granular {
 

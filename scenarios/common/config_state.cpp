@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "kernels/contact_state.hpp"
+#include "kernels/contact/contact_state.hpp"
 
 namespace granular {
 

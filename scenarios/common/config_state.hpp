@@ -12,11 +12,11 @@
 #include <utility>
 #include <vector>
 
-#include "core/box.hpp"
-#include "core/error.hpp"
-#include "core/host_particles.hpp"
-#include "core/output.hpp"
-#include "core/particles.hpp"
+#include "core/dem/box.hpp"
+#include "core/dem/host_particles.hpp"
+#include "core/dem/particles.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <type_traits>
 
-#include "core/error.hpp"
-#include "core/scene_file.hpp"
-#include "kernels/contact_model.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/run/error.hpp"
+#include "kernels/contact/contact_model.hpp"
 
 namespace granular {
 

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "core/box.hpp"
-#include "core/error.hpp"
-#include "core/output.hpp"
-#include "core/particles.hpp"
+#include "core/dem/box.hpp"
+#include "core/dem/particles.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

@@ -13,8 +13,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/error.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/run/error.hpp"
+#include "kernels/dem/dem_system.hpp"
 
 namespace granular {
 

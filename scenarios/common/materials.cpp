@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "core/pair_mixing.hpp"
-#include "core/restitution.hpp"
+#include "core/dem/pair_mixing.hpp"
+#include "core/dem/restitution.hpp"
 
 namespace granular {
 

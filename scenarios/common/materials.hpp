@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_file.hpp"
-#include "kernels/contact_model.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/contact/contact_model.hpp"
 
 namespace granular {
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/rng.hpp"
+#include "core/run/error.hpp"
+#include "core/run/rng.hpp"
 
 namespace granular {
 

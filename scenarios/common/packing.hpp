@@ -2,9 +2,9 @@
 #pragma once
 #include <cstdint>
 
-#include "core/box.hpp"
-#include "core/particles.hpp"
-#include "core/scene_file.hpp"
+#include "core/dem/box.hpp"
+#include "core/dem/particles.hpp"
+#include "core/io/scene_file.hpp"
 
 namespace granular {
 

@@ -19,7 +19,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "kernels/dem_system.hpp"
+#include "kernels/dem/dem_system.hpp"
 
 namespace granular {
 

@@ -15,11 +15,12 @@
 #include <sstream>
 #include <thread>
 
-#include "core/ensemble.hpp"
-#include "core/error.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/error.hpp"
 #include "granular_commit.hpp"
 #include "granular_config.hpp"
-#include "kernels/force_slabs.hpp"
+#include "kernels/cpu/force_slabs.hpp"
+#include "scenarios/common/charts.hpp"
 
 namespace granular {
 namespace fs = std::filesystem;
@@ -169,7 +170,7 @@ void record_run_in_summary(const std::string& dir, const Json& run) {
 
 bool write_report(const std::string& dir, const Json& run) {
   try {
-    return run_python_script("report.py", {dir, run.dump(0)}, "report");
+    return run_scene_script("report.py", {dir, run.dump(0)}, "report");
   } catch (const std::exception& e) {
     std::cerr << "warning: report not written: " << e.what() << "\n";
     return false;

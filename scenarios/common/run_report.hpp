@@ -5,7 +5,7 @@
 #pragma once
 #include <string>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 #include "scenarios/common/wall_config.hpp"
 
 namespace granular {

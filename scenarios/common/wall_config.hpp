@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "core/box.hpp"
-#include "core/output.hpp"
-#include "core/scene_file.hpp"
-#include "core/walls.hpp"
+#include "core/dem/box.hpp"
+#include "core/dem/walls.hpp"
+#include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
 
 namespace granular {
 

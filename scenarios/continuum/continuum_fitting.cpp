@@ -7,9 +7,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/deformation_paths.hpp"
-#include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/continuum/deformation_paths.hpp"
+#include "core/io/output.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

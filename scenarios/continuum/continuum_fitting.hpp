@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "core/continuum_law.hpp"
-#include "core/least_squares.hpp"
+#include "core/continuum/continuum_law.hpp"
+#include "core/continuum/least_squares.hpp"
 
 namespace granular {
 

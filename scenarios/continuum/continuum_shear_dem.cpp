@@ -4,7 +4,7 @@
 #include <Kokkos_Core.hpp>
 #include <cmath>
 
-#include "kernels/dem_system.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/element_test.hpp"
 
 namespace granular {

@@ -10,8 +10,9 @@
 #include <map>
 #include <sstream>
 
-#include "core/deformation_paths.hpp"
-#include "core/output.hpp"
+#include "core/continuum/deformation_paths.hpp"
+#include "core/io/output.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/continuum/continuum_fitting.hpp"

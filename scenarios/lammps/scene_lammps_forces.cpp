@@ -10,9 +10,10 @@
 #include <memory>
 #include <sstream>
 
-#include "core/error.hpp"
-#include "core/lammps_forces.hpp"
-#include "core/output.hpp"
+#include "core/io/output.hpp"
+#include "core/lammps/lammps_forces.hpp"
+#include "core/run/error.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 

@@ -9,8 +9,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "core/ensemble.hpp"
-#include "core/error.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/error.hpp"
 
 namespace granular {
 

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/output.hpp"
+#include "core/io/output.hpp"
 
 namespace granular {
 

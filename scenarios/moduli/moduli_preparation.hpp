@@ -6,7 +6,7 @@
 #include <functional>
 #include <string>
 
-#include "core/progress.hpp"
+#include "core/run/progress.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_probing.hpp"

@@ -10,7 +10,7 @@
 #include <string>
 #include <type_traits>
 
-#include "kernels/contact_hysteretic.hpp"
+#include "kernels/contact/contact_hysteretic.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"

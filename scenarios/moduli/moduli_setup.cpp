@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "core/error.hpp"
+#include "core/run/error.hpp"
 
 namespace granular::moduli_study {
 

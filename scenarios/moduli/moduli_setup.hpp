@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_file.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/packing.hpp"
 

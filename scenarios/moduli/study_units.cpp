@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "core/ensemble.hpp"
+#include "core/run/ensemble.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 
 namespace granular {

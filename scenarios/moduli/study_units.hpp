@@ -1,5 +1,5 @@
 // The units of a checkpointed study (preparation variants, mixtures) over the ranks of a
-// run (core/ensemble.hpp). Rank 0 says which units an earlier run finished (its
+// run (core/run/ensemble.hpp). Rank 0 says which units an earlier run finished (its
 // checkpoints); the others are dealt round robin in unit order, so a study killed on R ranks
 // resumes on any R'. Each finished unit is a part file in <out>/variants/; rank 0 reads
 // every part back in unit order at the end, so the outputs do not depend on who ran what.

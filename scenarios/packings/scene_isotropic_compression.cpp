@@ -8,10 +8,11 @@
 #include <iostream>
 #include <map>
 
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "kernels/contact_model.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/dem_system.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/run_report.hpp"

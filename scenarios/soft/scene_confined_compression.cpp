@@ -9,10 +9,11 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "core/run/progress.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/materials.hpp"

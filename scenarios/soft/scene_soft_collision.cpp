@@ -8,8 +8,9 @@
 #include <cmath>
 #include <iostream>
 
-#include "core/output.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "kernels/dem/dem_system.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_file.hpp"
-#include "kernels/multicontact.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/dem/multicontact.hpp"
 #include "scenarios/common/materials.hpp"
 
 namespace granular {

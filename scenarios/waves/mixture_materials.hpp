@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "core/pair_mixing.hpp"
-#include "core/scene_file.hpp"
-#include "kernels/contact_model.hpp"
+#include "core/dem/pair_mixing.hpp"
+#include "core/io/scene_file.hpp"
+#include "kernels/contact/contact_model.hpp"
 
 namespace granular {
 

@@ -34,11 +34,12 @@
 #include <map>
 #include <optional>
 
-#include "core/ensemble.hpp"
-#include "core/finite.hpp"
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "core/rng.hpp"
+#include "core/io/output.hpp"
+#include "core/run/ensemble.hpp"
+#include "core/run/finite.hpp"
+#include "core/run/progress.hpp"
+#include "core/run/rng.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"

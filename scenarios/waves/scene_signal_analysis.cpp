@@ -6,9 +6,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/output.hpp"
-#include "core/synthetic_signals.hpp"
-#include "core/trace_io.hpp"
+#include "core/io/output.hpp"
+#include "core/signal/synthetic_signals.hpp"
+#include "core/signal/trace_io.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/signal_report.hpp"

@@ -15,11 +15,12 @@
 #include <utility>
 #include <vector>
 
-#include "core/output.hpp"
-#include "core/progress.hpp"
-#include "core/rng.hpp"
-#include "kernels/dem_system.hpp"
+#include "core/io/output.hpp"
+#include "core/run/progress.hpp"
+#include "core/run/rng.hpp"
+#include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
+#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "core/output.hpp"
-#include "core/scene_file.hpp"
-#include "core/signal_pickers.hpp"
-#include "core/spectral_ratio.hpp"
-#include "core/spectrum.hpp"
+#include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
+#include "core/signal/signal_pickers.hpp"
+#include "core/signal/spectral_ratio.hpp"
+#include "core/signal/spectrum.hpp"
 
 namespace granular {
 

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "core/scene_file.hpp"
+#include "core/io/scene_file.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/waves/signal_report.hpp"
 

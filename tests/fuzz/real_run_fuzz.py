@@ -24,10 +24,10 @@ Every run must end in one of these ways:
 Anything else fails: a signal, a timeout, exit 1 (an exception that is neither of the two
 error types), text from a library instead of the engine's own message, a refusal that does
 not name the file, non-finite output of a finished run, or partial files left in the output
-folder (core/output.cpp writes "<dir>/.<name>.partial" and renames it when complete).
+folder (core/io/output.cpp writes "<dir>/.<name>.partial" and renames it when complete).
 
 GRANULAR_PLOTS_DIR points at an empty folder, so the engine skips charts and the report with
-a note (core/output.cpp, run_python_script) instead of starting matplotlib for every mutant.
+a note (core/io/output.cpp, run_python_script) instead of starting matplotlib for every mutant.
 results.h5 is read with h5dump when it exists, else through the HDF5 library the engine links
 (ctypes), else not at all; the totals line says which.
 

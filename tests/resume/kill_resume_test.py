@@ -92,7 +92,7 @@ WATCH_MASK = IN_CLOSE_WRITE | IN_MOVED_FROM | IN_MOVED_TO | IN_CREATE | IN_DELET
 
 
 def hidden(name):
-    # Partial files are ".<name>.partial" (core/output.cpp): never taken for results.
+    # Partial files are ".<name>.partial" (core/io/output.cpp): never taken for results.
     return name.startswith(".")
 
 

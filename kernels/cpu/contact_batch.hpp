@@ -1,0 +1,301 @@
+// Contacts evaluated in batches, four per instruction, for the host one-pass force kernel
+// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs) and the law of the frictional peer
+// benchmark and the linear element tests: linear normal spring-dashpot with the constant
+// Coulomb tangential spring, no rolling.
+//
+// A slab's rows are read in order; the touching contacts of whole rows are gathered into a
+// batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
+// registers (GCC vector extensions in a function compiled for AVX; the rest of the build
+// stays portable, and the batch is used only where the processor reports AVX at run time),
+// and the forces are then scattered row by row in list order. Every lane performs exactly
+// the scalar law's operations in the scalar order (no contraction into FMA, branches
+// replaced by selecting between both outcomes, a rare branch skipped only where no lane of a
+// vector takes it), and the sums keep the scalar kernel's order, so the trajectories are
+// bitwise those of the scalar path, on any processor (tests/test_contact_batch.cpp).
+// Measured (perf/README.md, design note): the batch made the frictional step 1.10-1.14x
+// faster, and its refinements (the split writing into the batch's slots, parameters
+// broadcast for one species, the rare branches skipped) 1.13-1.18x more; the frictionless
+// law, whose evaluation is a few operations, loses to the gather and scatter in two-lane
+// SSE2 and in AVX, so its rows stay contact by contact (the near list's stream, which loads
+// its inputs without a gather, does evaluate it in lanes: kernels/cpu/near_stream.hpp).
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <cmath>
+#include <cstring>
+#include <type_traits>
+
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/cpu/host_simd.hpp"
+
+// The batch exists where host AVX code is compiled.
+#define GRANULAR_CONTACT_BATCH GRANULAR_HOST_AVX
+
+namespace granular {
+
+// Which models have a batched evaluation (compile time), and whether this instance's
+// parameters allow it (run time: the Mindlin forms of the tangential spring do not).
+template <class Model>
+struct ContactBatchLaw {
+  static constexpr bool available = false;
+  static bool usable(const Model&) { return false; }
+  static bool uniform(const Model&) { return false; }
+};
+template <>
+struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
+  static constexpr bool available = GRANULAR_CONTACT_BATCH;
+  static bool usable(const ContactModel<LinearNormal, CoulombTangential>& m) {
+    if (m.coulomb_elastic_normal) return false;  // the batch limits with the total force
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (m.tangential.table.p[a][b].law != CoulombTangential::Constant) return false;
+    return true;
+  }
+  // Whether every pair has the parameters of pair (0, 0), bit for bit (so that broadcasting
+  // them changes no result, not even the sign of a zero).
+  static bool uniform(const ContactModel<LinearNormal, CoulombTangential>& m) {
+    if (!uniform_normal(m.normal)) return false;
+    const CoulombTangential::Params& t0 = m.tangential.table.p[0][0];
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+        if (!same_bits(t.kt, t0.kt) || !same_bits(t.gt, t0.gt) || !same_bits(t.mu_s, t0.mu_s) ||
+            !same_bits(t.mu_d, t0.mu_d))
+          return false;
+      }
+    return true;
+  }
+  static bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+  // Whether every pair has the normal parameters of pair (0, 0), bit for bit.
+  static bool uniform_normal(const LinearNormal& l) {
+    const LinearNormal::Params& n0 = l.table.p[0][0];
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b) {
+        const LinearNormal::Params& n = l.table.p[a][b];
+        if (!same_bits(n.kn, n0.kn) || !same_bits(n.gn, n0.gn)) return false;
+      }
+    return true;
+  }
+};
+
+#if GRANULAR_CONTACT_BATCH
+
+// One batch of touching contacts, structure of arrays. Rows (the owner particle i and the
+// end of its contacts in the batch) are never split between batches.
+struct ContactBatch {
+  static constexpr int kCap = 64;  // contacts; a row with more owned entries goes scalar
+  static constexpr int kW = 4;     // lanes per vector: one AVX register
+  using V = simd4::V;
+  using M = simd4::M;
+
+  int n = 0, rows = 0;
+  // One parameter set for every pair (a single species, or equal tables): the parameters are
+  // then broadcast from here instead of gathered contact by contact into kn ... mud.
+  bool uniform = false;
+  double ukn = 0, ugn = 0, ukt = 0, ugt = 0, umus = 0, umud = 0;
+  int row_i[kCap], row_end[kCap];
+  int j[kCap], k[kCap];
+  // Inputs: geometry and relative motion, radii, spins, parameters, the spring. The squared
+  // distance is formed again in the lanes (the scalar law's operations in its order, so the
+  // same bits) rather than stored by the split for every listed pair.
+  alignas(32) double rx[kCap + kW], ry[kCap + kW], rz[kCap + kW];
+  alignas(32) double dv0[kCap + kW], dv1[kCap + kW], dv2[kCap + kW];
+  alignas(32) double ai[kCap + kW], aj[kCap + kW];
+  alignas(32) double wi0[kCap + kW], wi1[kCap + kW], wi2[kCap + kW];
+  alignas(32) double wj0[kCap + kW], wj1[kCap + kW], wj2[kCap + kW];
+  alignas(32) double kn[kCap + kW], gn[kCap + kW], kt[kCap + kW], gt[kCap + kW];
+  alignas(32) double mus[kCap + kW], mud[kCap + kW];
+  // Spring (in: stored, out: advanced) and outputs: force on i, torques on i and j.
+  alignas(32) double h0[kCap + kW], h1[kCap + kW], h2[kCap + kW];
+  alignas(32) double f0[kCap + kW], f1[kCap + kW], f2[kCap + kW];
+  alignas(32) double q0[kCap + kW], q1[kCap + kW], q2[kCap + kW];
+  alignas(32) double p0[kCap + kW], p1[kCap + kW], p2[kCap + kW];
+
+  GRANULAR_AVX_INLINE static V load(const double* a) { return simd4::load(a); }
+  GRANULAR_AVX_INLINE static void store(double* a, V v) { simd4::store(a, v); }
+  GRANULAR_AVX_INLINE static V splat(double x) { return simd4::splat(x); }
+  GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return m ? a : b; }
+  // Whether any / every lane of a comparison holds. The square roots and divisions of the
+  // rare branches (a spring far out of the tangent plane, a sliding contact) are the slowest
+  // instructions of a lane: a vector none of whose lanes takes the branch skips them.
+  GRANULAR_AVX_INLINE static int lanes(M m) { return __builtin_ia32_movmskpd256((V)m); }
+  GRANULAR_AVX_INLINE static bool any(M m) { return lanes(m) != 0; }
+  GRANULAR_AVX_INLINE static bool all(M m) { return lanes(m) == 0xf; }
+  // A pair parameter of four lanes: broadcast (uniform) or loaded from the slots at a.
+  template <bool Uniform>
+  GRANULAR_AVX_INLINE static V par(const double* a, double u) {
+    if constexpr (Uniform)
+      return splat(u);
+    else
+      return load(a);
+  }
+  // The correctly rounded square root of each lane, as the scalar law takes it.
+  GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
+
+  // Every pair takes (pn, pt) from now on: no per-contact parameters are stored.
+  void set_uniform(const LinearNormal::Params& pn, const CoulombTangential::Params& pt) {
+    uniform = true;
+    ukn = pn.kn, ugn = pn.gn, ukt = pt.kt, ugt = pt.gt, umus = pt.mu_s, umud = pt.mu_d;
+  }
+
+  // Slot c's motion, given its separation (rx, ry, rz) already in place: the touching contact
+  // of bi (the owner) with bj in a flow of rate r3, and its stored spring h; the relative
+  // velocity is formed as pair_geometry forms it.
+  template <class Body>
+  GRANULAR_ALWAYS_INLINE void set_motion(int c, const Body& bi, const Body& bj, const double r3[3],
+                                         const double* h) {
+    dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx[c];
+    dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry[c];
+    dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz[c];
+    ai[c] = bi.a, aj[c] = bj.a;
+    wi0[c] = bi.w[0], wi1[c] = bi.w[1], wi2[c] = bi.w[2];
+    wj0[c] = bj.w[0], wj1[c] = bj.w[1], wj2[c] = bj.w[2];
+    h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
+  }
+  // Slot c's pair parameters (unless uniform).
+  GRANULAR_ALWAYS_INLINE void set_params(int c, const LinearNormal::Params& pn,
+                                         const CoulombTangential::Params& pt) {
+    kn[c] = pn.kn, gn[c] = pn.gn;
+    kt[c] = pt.kt, gt[c] = pt.gt, mus[c] = pt.mu_s, mud[c] = pt.mu_d;
+  }
+
+  // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
+  // separation (rx, ry, rz) in a flow of rate r3, with its pair's parameters and stored
+  // spring h.
+  template <class Body>
+  void push(const Body& bi, const Body& bj, int j_, int k_, double rx_, double ry_, double rz_,
+            const double r3[3], const LinearNormal::Params& pn, const CoulombTangential::Params& pt,
+            const double* h) {
+    const int c = n++;
+    j[c] = j_, k[c] = k_;
+    rx[c] = rx_, ry[c] = ry_, rz[c] = rz_;
+    set_motion(c, bi, bj, r3, h);
+    set_params(c, pn, pt);
+  }
+
+  // Pads the last vector with copies of the last contact (evaluated, never scattered).
+  void pad() {
+    if (n == 0) return;
+    double* arrays[] = {rx,  ry,  rz, dv0, dv1, dv2, ai,  aj,  wi0, wi1, wi2, wj0,
+                        wj1, wj2, kn, gn,  kt,  gt,  mus, mud, h0,  h1,  h2};
+    for (double* a : arrays)
+      for (int c = n; c < (n + kW - 1) / kW * kW; ++c) a[c] = a[n - 1];
+  }
+
+  // Linear normal law and the constant Coulomb spring, rotated into the tangent plane, and
+  // the torques. The operations follow pair_geometry, LinearNormal::force,
+  // CoulombTangential::force (rotate_into_plane, coulomb_spring) and ContactModel::evaluate.
+  // Only where cpu_has_avx().
+  void evaluate(double dt) {
+    pad();
+    if (uniform)
+      evaluate_lanes<true>(dt);
+    else
+      evaluate_lanes<false>(dt);
+  }
+
+  // One vector of contacts: the law's inputs (the spring s0..s2 in and out) and outputs.
+  struct Lanes {
+    V X, Y, Z, ai, aj, d0, d1, d2, wi0, wi1, wi2, wj0, wj1, wj2, s0, s1, s2;
+    V F0, F1, F2, q0, q1, q2, p0, p1, p2;  // force on i, torques on i and j
+  };
+  struct LaneParams {
+    V kn, gn, kt, gt, mus, mud;
+  };
+
+  template <bool Uniform>
+  GRANULAR_AVX void evaluate_lanes(double dt) {
+    const V vdt = splat(dt);
+    for (int c = 0; c < n; c += kW) {
+      Lanes l;
+      l.X = load(rx + c), l.Y = load(ry + c), l.Z = load(rz + c);
+      l.ai = load(ai + c), l.aj = load(aj + c);
+      l.d0 = load(dv0 + c), l.d1 = load(dv1 + c), l.d2 = load(dv2 + c);
+      l.wi0 = load(wi0 + c), l.wi1 = load(wi1 + c), l.wi2 = load(wi2 + c);
+      l.wj0 = load(wj0 + c), l.wj1 = load(wj1 + c), l.wj2 = load(wj2 + c);
+      l.s0 = load(h0 + c), l.s1 = load(h1 + c), l.s2 = load(h2 + c);
+      const LaneParams p{par<Uniform>(kn + c, ukn),   par<Uniform>(gn + c, ugn),
+                         par<Uniform>(kt + c, ukt),   par<Uniform>(gt + c, ugt),
+                         par<Uniform>(mus + c, umus), par<Uniform>(mud + c, umud)};
+      law(l, p, vdt);
+      store(h0 + c, l.s0), store(h1 + c, l.s1), store(h2 + c, l.s2);
+      store(q0 + c, l.q0), store(q1 + c, l.q1), store(q2 + c, l.q2);
+      store(p0 + c, l.p0), store(p1 + c, l.p1), store(p2 + c, l.p2);
+      store(f0 + c, l.F0), store(f1 + c, l.F1), store(f2 + c, l.F2);
+    }
+  }
+
+  // The law on one vector of contacts (also the near stream's, kernels/cpu/near_stream.hpp). The
+  // rare branches are taken only where a lane in `active` needs them: the other lanes (apart
+  // pairs of the stream) are not used, and must not send a vector down a branch.
+  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt,
+                                      M active = M{-1, -1, -1, -1}) {
+    const V one = splat(1.0), zero = splat(0.0), half = splat(0.5);
+    const V X = l.X, Y = l.Y, Z = l.Z;
+    const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
+    const V inv = one / r;
+    const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
+    const V a_i = l.ai, a_j = l.aj;
+    const V delta = a_i + a_j - r;
+    const V d0 = l.d0, d1 = l.d1, d2 = l.d2;
+    const V vn = d0 * n0 + d1 * n1 + d2 * n2;
+    const V fn = p.kn * delta + p.gn * -vn;
+    V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
+    const V li = a_i - half * delta, lj = a_j - half * delta;
+    const V aw0 = li * l.wi0 + lj * l.wj0;
+    const V aw1 = li * l.wi1 + lj * l.wj1;
+    const V aw2 = li * l.wi2 + lj * l.wj2;
+    const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
+    const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
+    // rotate_into_plane: an empty spring stays as it is, one along the normal is released.
+    V s0 = l.s0, s1 = l.s1, s2 = l.s2;
+    const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
+    const M empty = len_sq == zero;
+    const V sn = s0 * n0 + s1 * n1 + s2 * n2;
+    const V x = sn * sn / sel(empty, one, len_sq);
+    const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
+    const M small = x < splat(1e-4);
+    V scale = taylor;
+    M released = small & ~small;  // none
+    if (!all(small | ~active)) {
+      const M in_plane = x < splat(1.0 - kSpringAlongNormal);  // false for NaN too
+      const M root = in_plane & ~small;
+      scale = sel(root, one / vsqrt(sel(root, one - x, one)), taylor);
+      released = ~(in_plane | empty);
+    }
+    s0 = sel(empty, s0, (s0 - sn * n0) * scale);
+    s1 = sel(empty, s1, (s1 - sn * n1) * scale);
+    s2 = sel(empty, s2, (s2 - sn * n2) * scale);
+    s0 = sel(released, zero, s0), s1 = sel(released, zero, s1), s2 = sel(released, zero, s2);
+    s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
+    // coulomb_spring with k = kt, g = gt.
+    const V k = p.kt, g = p.gt, nk = -k;
+    V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
+    const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
+    const V afn = sel(fn < zero, -fn, fn);
+    const V limit = p.mus * afn;
+    const M slides = f_sq > limit * limit;
+    if (any(slides & active)) {
+      const V fmag = vsqrt(f_sq);
+      const V slide = p.mud * afn;
+      const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
+      const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
+      const M stiff = k > zero;
+      const V kk = sel(stiff, k, one);
+      s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
+      s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
+      s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
+      t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
+    }
+    l.s0 = s0, l.s1 = s1, l.s2 = s2;
+    l.F0 = F0 + t0, l.F1 = F1 + t1, l.F2 = F2 + t2;
+    // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
+    const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
+    const V mli = -li, mlj = -lj;
+    l.q0 = mli * x0, l.q1 = mli * x1, l.q2 = mli * x2;
+    l.p0 = mlj * x0, l.p1 = mlj * x1, l.p2 = mlj * x2;
+  }
+};
+
+#endif  // GRANULAR_CONTACT_BATCH
+
+}  // namespace granular

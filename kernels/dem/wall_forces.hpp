@@ -1,0 +1,221 @@
+// Sphere-wall contacts and body forces. A wall is evaluated by the same contact model
+// structs as a pair, as a partner of infinite radius and mass (PairState::wall): R* = a_i,
+// m* = m_i, the wall's material in its species slot. Every particle tests every wall
+// (walls are few), so wall contacts need no list; their history is a dense
+// (particle, wall) table that moves with the particles when they are reordered. Multi-contact
+// laws act through a hook, as in the pair pass.
+#pragma once
+#include <Kokkos_Core.hpp>
+#include <vector>
+
+#include "core/dem/particles.hpp"
+#include "core/dem/walls.hpp"
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/dem/contact_forces.hpp"
+#include "kernels/dem/deterministic_sum.hpp"
+
+namespace granular {
+
+// Geometry and relative motion of particle bi against wall w; false if they do not touch.
+// The normal points from the wall into the particle (the direction of the force on it).
+KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool rotations,
+                                          PairState& s) {
+  const double gap = (bi.x[0] - w.p[0]) * w.n[0] + (bi.x[1] - w.p[1]) * w.n[1] +
+                     (bi.x[2] - w.p[2]) * w.n[2];  // signed distance, negative inside
+  const double delta = bi.a + gap;
+  if (!(delta > 0.0)) return false;
+  s.n[0] = -w.n[0], s.n[1] = -w.n[1], s.n[2] = -w.n[2];
+  s.delta = delta;
+  s.ai = bi.a, s.aj = 0.0;
+  s.mstar = bi.m;
+  s.si = bi.s, s.sj = w.material;
+  s.wall = true;
+  const double dv[3] = {bi.v[0] - w.v[0], bi.v[1] - w.v[1], bi.v[2] - w.v[2]};
+  const double vn = dot3(dv, s.n);
+  s.delta_dot = -vn;
+  // Contact point mid-overlap, as for pairs: lever arm a_i - delta/2 from the centre.
+  const double li = bi.a - 0.5 * delta;
+  double c[3] = {0, 0, 0};
+  if (rotations) {
+    const double aw[3] = {li * bi.w[0], li * bi.w[1], li * bi.w[2]};
+    cross3(aw, s.n, c);
+  }
+  for (int d = 0; d < 3; ++d) {
+    s.vt[d] = dv[d] - vn * s.n[d] - c[d];
+    s.wrel[d] = rotations ? bi.w[d] : 0.0;
+  }
+  return true;
+}
+
+// Columns of the per-(particle, wall) record: force on the wall (3), torque on the wall
+// about its reference point (3), contact flag, elastic energy, overlap / a_i.
+constexpr int kWallColumns = 9;
+
+// Extension point for laws that need more than the contact (multi-contact,
+// kernels/dem/multicontact.hpp): a hook may replace the evaluation of a touching sphere-wall
+// contact and record per-contact data. NoWallHook compiles the classical kernel unchanged.
+struct NoWallHook {
+  static constexpr bool active = false;
+  static constexpr const char* label = "dem::add_external_forces";
+  template <class Model>
+  KOKKOS_INLINE_FUNCTION void evaluate(const Model&, int, int, const PairState&, double, double*,
+                                       PairForce&) const {}
+  KOKKOS_INLINE_FUNCTION void apart(int, int) const {}
+};
+
+// The wall pass over one particle: adds its wall contact forces and gravity to f and torque,
+// advances its wall histories and records each wall's share for the wall sums. A functor class
+// rather than a lambda: nvcc's wrapper of a host-device lambda inside a function template
+// instantiated in several translation units can be linked with a null copy helper, and the
+// walls' tests then jumped to address 0 on a device (perf/README.md, design note on the GPU).
+template <class ExecSpace, class Model, class HistoryView, class RecordView, class Hook>
+struct WallForcePass {
+  ParticleViews<ExecSpace> pv;
+  typename Particles<ExecSpace>::vec_view f, torque;
+  typename WallSet<ExecSpace>::view_type walls;
+  int nwalls;
+  HistoryView history;
+  RecordView record;
+  Model m;
+  Hook hook;
+  double g[3];
+  double dt;
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    constexpr int H = Model::history;
+    constexpr bool rot = Model::rotations;
+    constexpr int WC = kWallColumns;
+    const Body bi = load_body(pv, i, rot);
+    double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
+    double qi[3] = {0, 0, 0};
+    for (int w = 0; w < nwalls; ++w) {
+      const Wall wall = walls(w);
+      PairState s;
+      if (!wall_geometry(bi, wall, rot, s)) {
+        // Most particles touch no wall: their record and history are already zero (the
+        // contact flag says so), and rewriting them every step cost more memory traffic
+        // than the contacts themselves.
+        if (record(i, w * WC + 6) != 0.0) {
+          for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
+          if constexpr (H > 0)
+            for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
+        }
+        if constexpr (Hook::active) hook.apart(i, w);
+        continue;
+      }
+      double h[H > 0 ? H : 1];
+      if constexpr (H > 0)
+        for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
+      PairForce out;
+      if constexpr (Hook::active)
+        hook.evaluate(m, i, w, s, dt, h, out);
+      else
+        m.evaluate(s, dt, h, out);
+      if constexpr (H > 0)
+        for (int c = 0; c < H; ++c) history(i, w * H + c) = h[c];
+      for (int d = 0; d < 3; ++d) fi[d] += out.f[d];
+      if constexpr (rot)
+        for (int d = 0; d < 3; ++d) qi[d] += out.q[d];
+      // Reaction on the wall: force -f and, about the wall point p, the torque that
+      // balances the particle's angular momentum change: -(x_i - p) x f - q_i.
+      const double r[3] = {bi.x[0] - wall.p[0], bi.x[1] - wall.p[1], bi.x[2] - wall.p[2]};
+      double rxf[3];
+      cross3(r, out.f, rxf);
+      for (int d = 0; d < 3; ++d) {
+        record(i, w * WC + d) = -out.f[d];
+        record(i, w * WC + 3 + d) = -rxf[d] - (rot ? out.q[d] : 0.0);
+      }
+      record(i, w * WC + 6) = 1.0;
+      record(i, w * WC + 7) = m.energy(s, h);
+      record(i, w * WC + 8) = s.delta / s.ai;
+    }
+    for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
+    if constexpr (rot)
+      for (int d = 0; d < 3; ++d) torque(i, d) += qi[d];
+  }
+};
+
+// Adds wall contact forces and gravity to f and torque (after the pair gather), advances
+// the wall histories, and records each wall's share per particle for the wall sums.
+// history: (n, walls * H); record: (n, walls * kWallColumns).
+template <class ExecSpace, class Model, class HistoryView, class RecordView,
+          class Hook = NoWallHook>
+void add_external_forces(const Particles<ExecSpace>& p,
+                         const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
+                         const HistoryView& history, const RecordView& record, const Model& model,
+                         const double gravity[3], double dt, const Hook& wall_hook = Hook()) {
+  const WallForcePass<ExecSpace, Model, HistoryView, RecordView, Hook> pass{
+      ParticleViews<ExecSpace>(p),
+      p.f,
+      p.torque,
+      walls,
+      nwalls,
+      history,
+      record,
+      model,
+      wall_hook,
+      {gravity[0], gravity[1], gravity[2]},
+      dt};
+  Kokkos::parallel_for(Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), pass);
+}
+
+// The largest overlap / a_i in column 8 of one wall's records (a functor, as above).
+template <class Cols>
+struct MaxOverlapPass {
+  Cols cols;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, double& m) const {
+    const double o = cols(i, 8);
+    m = o > m ? o : m;
+  }
+};
+
+// New row i of b is old row order(i) of a (a functor, as above).
+template <class View2D, class Order>
+struct PermuteRowsPass {
+  View2D b, a;
+  Order order;
+  int nc;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    const int o = order(i);
+    for (int c = 0; c < nc; ++c) b(i, c) = a(o, c);
+  }
+};
+
+// What the walls feel, summed over particles in a fixed order (thread-count independent).
+struct WallLoad {
+  double force[3] = {};   // total force on the wall
+  double torque[3] = {};  // about the wall's reference point
+  double contacts = 0;
+  double energy = 0;       // elastic energy stored in its contacts
+  double max_overlap = 0;  // largest delta / a_i
+};
+
+template <class ExecSpace, class RecordView>
+std::vector<WallLoad> wall_loads(const RecordView& record, int n, int nwalls) {
+  std::vector<WallLoad> out(nwalls);
+  for (int w = 0; w < nwalls; ++w) {
+    auto cols = Kokkos::subview(record, Kokkos::ALL,
+                                std::make_pair(w * kWallColumns, (w + 1) * kWallColumns));
+    const auto sums = deterministic_column_sums<kWallColumns, ExecSpace>(cols, n);
+    for (int d = 0; d < 3; ++d) out[w].force[d] = sums[d], out[w].torque[d] = sums[3 + d];
+    out[w].contacts = sums[6];
+    out[w].energy = sums[7];
+    double mo = 0.0;
+    Kokkos::parallel_reduce("dem::wall_loads::max_overlap", Kokkos::RangePolicy<ExecSpace>(0, n),
+                            MaxOverlapPass<decltype(cols)>{cols}, Kokkos::Max<double>(mo));
+    out[w].max_overlap = mo;
+  }
+  return out;
+}
+
+// Rows of a (n, c) view reordered with the particles: new row i is old row order(i).
+template <class ExecSpace, class View2D, class Order>
+void permute_rows(View2D& a, const Order& order, int n) {
+  if (a.extent(0) == 0) return;
+  View2D b(a.label(), a.extent(0), a.extent(1));
+  Kokkos::parallel_for("dem::permute_rows", Kokkos::RangePolicy<ExecSpace>(0, n),
+                       PermuteRowsPass<View2D, Order>{b, a, order, static_cast<int>(a.extent(1))});
+  a = b;
+}
+
+}  // namespace granular
