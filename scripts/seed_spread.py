@@ -5,6 +5,7 @@ quoted with their spread.
 
     scripts/seed_spread.py GRANULAR SCENE.toml --seed-key column.seed --seeds 1,2,3,4,5
                            --out DIR [--threads N] [--quantities PATTERN,...] [--reuse]
+                           [--chart X:Y[;X:Y...]]
 
 Each seed runs a copy of the scene file, beside the original (relative input paths keep
 their meaning), with `<table>.<key>` set to the seed; the copy is removed afterwards. Writes
@@ -13,6 +14,11 @@ mean, standard error, n) and DIR/spread.md (the paths matching --quantities, fnm
 default every path). A seed whose run fails is listed with its message and left out of the
 statistics; the script exits 1 when any failed. --reuse takes a seed's earlier run in
 DIR/seed_<k>/ (its summary.json) instead of running it again.
+
+--chart draws each Y against X with error bars (mean +- standard error) into
+DIR/spread_<k>.png: X and Y are summary paths with one `[*]` for the list index, e.g.
+`fits[*].soft_fraction:fits[*].fit_M.exponent`; X is the mean over seeds (a list of the
+same values in every run, such as the pressures or fractions of the table).
 """
 import argparse
 import fnmatch
@@ -68,6 +74,37 @@ def mean_se(values):
     return m, math.sqrt(var / n)
 
 
+def chart_points(spread, x_pat, y_pat):
+    """(x mean, y mean, y standard error) for every index i where both paths, with [*]
+    replaced by [i], are in the spread."""
+    if x_pat.count("[*]") != 1 or y_pat.count("[*]") != 1:
+        raise SystemExit(f"--chart paths need one [*] each: {x_pat}:{y_pat}")
+    points, i = [], 0
+    while True:
+        x, y = x_pat.replace("[*]", f"[{i}]"), y_pat.replace("[*]", f"[{i}]")
+        if x not in spread and y not in spread:
+            return points
+        if x in spread and y in spread:
+            points.append((spread[x]["mean"], spread[y]["mean"], spread[y]["standard_error"]))
+        i += 1
+
+
+def draw(path, points, x_pat, y_pat, n):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(5.2, 3.8))
+    xs, ys, es = zip(*points)
+    ax.errorbar(xs, ys, yerr=[0.0 if math.isnan(e) else e for e in es], fmt="o-", capsize=4,
+                label=f"mean ± standard error over {n} packings")
+    ax.set_xlabel(x_pat.replace("[*]", ""))
+    ax.set_ylabel(y_pat.replace("[*]", ""))
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("granular")
@@ -78,6 +115,7 @@ def main():
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--quantities", default="*")
     ap.add_argument("--reuse", action="store_true", help="keep finished runs found in --out")
+    ap.add_argument("--chart", default="", help="X:Y[;X:Y...] paths with [*] (see above)")
     args = ap.parse_args()
     table, _, key = args.seed_key.rpartition(".")
     if not table:
@@ -135,6 +173,15 @@ def main():
         q = spread[p]
         md.append(f"| `{p}` | {q['mean']:.4g} ± {q['standard_error']:.2g} | "
                   + ", ".join(f"{v:.4g}" for v in q["values"]) + " |")
+    charts = [c for c in args.chart.split(";") if c]
+    for k, chart in enumerate(charts, 1):
+        x_pat, _, y_pat = chart.partition(":")
+        points = chart_points(spread, x_pat, y_pat)
+        if not points:
+            md.append(f"\nChart {k}: no quantity matches {chart}")
+            continue
+        draw(out / f"spread_{k}.png", points, x_pat, y_pat, len(done))
+        md.append(f"\n![{y_pat} against {x_pat}](spread_{k}.png)")
     (out / "spread.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
     sys.exit(1 if failed else 0)

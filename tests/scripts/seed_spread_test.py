@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """scripts/seed_spread.py on chain_tones_quick with three seeds: the packings differ, the
 scene file is left as it was, and every reported mean and standard error equals the one
-computed here from the three runs' own summary.json; a seed whose run fails is listed, left
-out of the statistics, and makes the script exit 1.
+computed here from the three runs' own summary.json; a chart's points are those means and
+errors, index by index, and its PNG is written and listed; a seed whose run fails is listed,
+left out of the statistics, and makes the script exit 1.
 
     seed_spread_test.py GRANULAR"""
+import importlib.util
 import json
 import math
 import subprocess
@@ -49,6 +51,26 @@ def main():
         check(moved > 10, f"only {moved} quantities vary between seeds")
         md = (out / "spread.md").read_text()
         check("| quantity | mean ± s.e. | values |" in md and "band" in md, "spread.md table")
+        # Charts: points against the spread, then the PNG from the runs kept (--reuse).
+        spec = importlib.util.spec_from_file_location("seed_spread", ROOT / "scripts" / "seed_spread.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        q = spread["quantities"]
+        listed = sorted(p for p in q if "[0]" in p and p.replace("[0]", "[1]", 1) in q)
+        check(len(listed) >= 2, "list quantities to chart")
+        x_pat, y_pat = listed[0].replace("[0]", "[*]", 1), listed[1].replace("[0]", "[*]", 1)
+        pts = mod.chart_points(q, x_pat, y_pat)
+        check(len(pts) >= 2, f"chart points of {x_pat}:{y_pat}")
+        for i, (x, y, e) in enumerate(pts):
+            xp, yp = x_pat.replace("[*]", f"[{i}]"), y_pat.replace("[*]", f"[{i}]")
+            check((x, y, e) == (q[xp]["mean"], q[yp]["mean"], q[yp]["standard_error"]),
+                  f"chart point {i}")
+        again = cmd + ["--reuse", "--chart", f"{x_pat}:{y_pat}"]
+        r = subprocess.run(again, capture_output=True, text=True)
+        check(r.returncode == 0 and "reused" in r.stdout, f"chart run: {r.stdout[-400:]}{r.stderr[-400:]}")
+        png = out / "spread_1.png"
+        check(png.exists() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", "chart PNG written")
+        check("(spread_1.png)" in (out / "spread.md").read_text(), "chart listed in spread.md")
         # A failing seed (one beyond 64 bits is refused by the scene file's reader) is listed
         # and left out.
         huge = "99999999999999999999"
