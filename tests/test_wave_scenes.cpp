@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -12,6 +13,7 @@
 #include "core/run/error.hpp"
 #include "granular_config.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/skeleton.hpp"
 #include "tests/test_support.hpp"
 
 using namespace granular;
@@ -94,4 +96,29 @@ TEST(WaveTransmissionScene, BadVolumeFractionsAndMaterialsNameKeyAndFile) {
     }
     EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
   }
+}
+
+TEST(WaveSkeleton, RattlersArePeeledRoundAfterRoundWithWallsAsContacts) {
+  // Column x in [0, 10] between the walls, periodic along y and z (length 10).
+  // A (x = 0.9) touches the source wall and B; B (x = 2.8) touches A and C; C (x = 4.7) touches B
+  // only; D touches E across the periodic y boundary, E touches D only; F touches nothing.
+  ConfigState c;
+  c.box.len[0] = c.box.len[1] = c.box.len[2] = 10;
+  c.box.periodic[1] = c.box.periodic[2] = true;
+  const double rows[6][4] = {{0.9, 2.0, 2.0, 1.0}, {2.8, 2.0, 2.0, 1.0}, {4.7, 2.0, 2.0, 1.0},
+                             {3.0, 0.2, 7.0, 0.5}, {3.0, 9.5, 7.0, 0.5}, {3.0, 5.0, 5.0, 0.3}};
+  c.particles.resize(6);
+  for (int i = 0; i < 6; ++i) {
+    c.particles.x[i] = rows[i][0], c.particles.y[i] = rows[i][1], c.particles.z[i] = rows[i][2];
+    c.particles.radius[i] = rows[i][3];
+    c.mass.push_back(std::pow(rows[i][3], 3));
+  }
+  const double total = 3 + 2 * 0.125 + 0.027;
+  // Below 2 contacts: F (none), then C, D, E (one each); C's removal leaves B with one (A), so B
+  // goes next, then A (the wall alone): everything is peeled.
+  EXPECT_NEAR(rattler_mass_fraction(c, 0.0, 10.0, 2), 1.0, 1e-15);
+  // With a receiver wall at x = 5.5, C touches it: A-B-C bridges the walls and stays.
+  EXPECT_NEAR(rattler_mass_fraction(c, 0.0, 5.5, 2), (2 * 0.125 + 0.027) / total, 1e-15);
+  // Nothing is a rattler below one contact except F.
+  EXPECT_NEAR(rattler_mass_fraction(c, 0.0, 5.5, 1), 0.027 / total, 1e-15);
 }

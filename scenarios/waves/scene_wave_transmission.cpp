@@ -25,6 +25,7 @@
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/skeleton.hpp"
 #include "scenarios/waves/wave_setup.hpp"
 
 namespace granular {
@@ -131,143 +132,200 @@ MaterialSet preparation_materials(const WaveSetup& w) {
 
 // Loading branch: the servo drives the source wall until sigma_xx is within the tolerance
 // of each target, then the packing relaxes with the wall held; a state is kept per target.
+// One object per preparation: the system, the source wall's position and the stress it
+// reads, and the phases of one target (gas compression, held states, piston).
+template <class Model>
+class WaveServo {
+ public:
+  WaveServo(const Model& model, const WaveSetup& w, const HostParticles& h, const PeriodicBox& box)
+      : w_(w),
+        box_(box),
+        sys_(servo_system(model, w, h, box)),
+        area_(box.len[1] * box.len[2]),
+        sample_mass_(sample_mass(h)),
+        max_steps_(static_cast<long>(w.max_time / w.dt)) {
+    set_speed(0.0);
+  }
+
+  // Brings the packing to `target` and leaves the wall held there.
+  void reach(double target, const RunOptions& opts) {
+    Progress progress("servo to " + std::to_string(target) + " MPa", max_steps_, opts.progress);
+    progress_ = &progress;
+    target_ = target;
+    steps_ = 0;
+    sigma_ = wall_stress(sys_.wall_loads(), area_);
+    held_.clear();
+    compress_gas();
+    if (!held_states()) piston();
+    set_speed(0.0);
+    progress.finish();
+    progress_ = nullptr;
+  }
+
+  DemSystem<Exec, Model>& system() { return sys_; }
+  double wall_position() const { return xs_; }
+  double stress() const { return sigma_; }
+  long steps() const { return steps_; }
+  double area() const { return area_; }
+
+ private:
+  // Source wall moving at v (into the sample) from now on.
+  void set_speed(double v) {
+    auto walls = column_walls(w_, box_, xs_);
+    walls[0].motion = WallMotion::Velocity;
+    walls[0].velocity[0] = v;
+    walls[0].point[0] = xs_ - v * sys_.time();
+    sys_.set_walls(walls);
+  }
+
+  bool on_target(double sigma) const { return std::abs(target_ - sigma) < w_.tolerance * target_; }
+
+  void advance(double time) {
+    const long n = std::max<long>(1, static_cast<long>(std::ceil(time / w_.dt)));
+    sys_.step(n);
+    steps_ += n;
+    xs_ = sys_.walls().host()(0).p[0];
+    sys_.check_health(sys_.measure());
+    sigma_ = wall_stress(sys_.wall_loads(), area_);
+    progress_->update(steps_);
+    if (steps_ > max_steps_) out_of_time();
+  }
+
+  // The last held states say whether the servo oscillated, crept or never loaded.
+  [[noreturn]] void out_of_time() const {
+    std::ostringstream last;
+    last.precision(6);
+    const size_t from = held_.size() > 8 ? held_.size() - 8 : 0;
+    for (size_t k = from; k < held_.size(); ++k)
+      last << (k > from ? ", " : "") << "gap " << held_[k].first << " mm: " << held_[k].second;
+    throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target_) +
+                       " MPa within preparation.max_time (now " + std::to_string(sigma_) +
+                       " MPa after " + std::to_string(held_.size()) + " held states; the last: " +
+                       last.str() + "): raise it, or preparation.wall_speed");
+  }
+
+  // A gas has no stiffness to aim with, and its wall force is a train of collisions: the
+  // wall runs at wall_speed until the volume fraction reaches gas_end_phi, whatever the
+  // force says.
+  void compress_gas() {
+    const double vp = sys_.particle_volume();
+    while (vp / ((box_.len[0] - xs_) * area_) < w_.gas_end_phi) {
+      set_speed(w_.wall_speed);
+      advance(0.5 * w_.damping_time);
+    }
+  }
+
+  // Held states: hold for relax_time, measure, and move the wall by 0.7 of the secant
+  // estimate from the last two held states (a fixed small push while the packing carries no
+  // load or the secant is not yet defined), at most max_push of the gap. A held state near
+  // the target must stay there over final_relax_time. Returns false where it does not: the
+  // packing creeps (see piston).
+  bool held_states() {
+    double x_prev = NAN, s_prev = NAN;
+    while (true) {
+      set_speed(0.0);
+      advance(w_.relax_time);
+      held_.emplace_back(box_.len[0] - xs_, sigma_);
+      if (on_target(sigma_)) {
+        advance(w_.final_relax_time);  // and still there after a long relaxation
+        return on_target(sigma_);
+      }
+      const double gap = box_.len[0] - xs_, dmax = w_.max_push * gap;
+      double dx = sigma_ > 0 ? 0.5 * dmax : dmax;
+      const double slope =
+          std::isfinite(s_prev) && xs_ != x_prev ? (sigma_ - s_prev) / (xs_ - x_prev) : 0;
+      if (slope > 0 && sigma_ > 0)
+        dx = 0.7 * (target_ - sigma_) / slope;
+      else if (sigma_ > target_)
+        dx = -0.5 * dmax;
+      dx = std::clamp(dx, -dmax, dmax);
+      x_prev = xs_, s_prev = sigma_;
+      const double v = std::copysign(std::min(w_.wall_speed, std::abs(dx) / w_.damping_time), dx);
+      set_speed(v);
+      advance(dx / v);
+    }
+  }
+
+  // Where a held state creeps, the stress read after relax_time was the push's transient,
+  // and at a fixed wall it decays (in the full column at 0.05 MPa, from the target to 0.002
+  // MPa over 1000 us) while the packing consolidates; held states then only inch towards
+  // jamming. Here the wall is a piston of the sample's mass pushed by the target stress: it
+  // follows the consolidation as it happens, and it comes to rest only where the packing
+  // carries the target (the particles' damping takes the energy out). Each relax_time the
+  // piston is judged like a held state, at rest.
+  void piston() {
+    const double tick = 0.1 * w_.damping_time;
+    double vw = 0, peak = 0;
+    while (true) {
+      double moved = 0, mean = 0;
+      const int ticks = std::max(1, static_cast<int>(std::lround(w_.relax_time / tick)));
+      for (int k = 0; k < ticks; ++k) {
+        vw += tick * (target_ - sigma_) * area_ / sample_mass_;
+        set_speed(vw);
+        const double x0 = xs_;
+        advance(tick);
+        moved += std::abs(xs_ - x0), mean += sigma_ / ticks;
+      }
+      held_.emplace_back(box_.len[0] - xs_, mean);
+      // At rest: a piston that still travels carries a flow's drag, not a packing's load (a
+      // steady creep at 6e-5 mm/us read as the target while the packing held 0.0025 MPa).
+      peak = std::max(peak, moved);
+      if (on_target(mean) && moved < 0.1 * peak) {
+        set_speed(0.0), vw = 0;
+        advance(w_.final_relax_time);
+        if (on_target(sigma_)) return;
+      }
+    }
+  }
+
+  const WaveSetup& w_;
+  const PeriodicBox& box_;
+  DemSystem<Exec, Model> sys_;
+  const double area_, sample_mass_;
+  const long max_steps_;
+  double xs_ = 0, sigma_ = 0, target_ = 0;
+  long steps_ = 0;
+  std::vector<std::pair<double, double>> held_;  // (gap, sigma_xx) of each held state
+  Progress* progress_ = nullptr;
+};
+
+// The state the servo holds at its target, with what the wave analysis needs of it.
+template <class Model>
+Prepared prepared_state(WaveServo<Model>& servo, const std::vector<double>& density,
+                        const HostParticles& h, const PeriodicBox& box) {
+  auto& sys = servo.system();
+  const double area = servo.area(), sigma = servo.stress();
+  Prepared p;
+  p.xs = servo.wall_position(), p.pressure = sigma, p.steps = servo.steps();
+  p.gap = box.len[0] - p.xs;
+  const Measurements m = sys.measure();
+  p.phi = sys.particle_volume() / (p.gap * area);
+  double mass = 0, vol = 0;
+  for (int i = 0; i < h.size(); ++i) {
+    const double v = 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
+    mass += density[i] * v, vol += v;
+  }
+  p.rho_bulk = mass / (p.gap * area);
+  p.rho_solid = mass / vol;
+  // measure() divides by the box volume, which includes the empty part behind the wall
+  const double vbox = box.len[0] * area;
+  p.lateral_ratio = 0.5 * (m.stress[1] + m.stress[2]) * vbox / (p.gap * area) / sigma;
+  p.z = m.z, p.max_overlap = m.max_overlap;
+  p.state = snapshot(sys, density, sigma);
+  std::cout << "prepared sigma_xx = " << sigma << " MPa: phi = " << p.phi << ", Z = " << m.z
+            << ", sigma_lat/sigma_xx = " << p.lateral_ratio << ", L = " << p.gap << " mm\n";
+  return p;
+}
+
 template <class Model>
 std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
                               const std::vector<double>& density, const HostParticles& h,
                               const PeriodicBox& box, const RunOptions& opts) {
-  DemSystem<Exec, Model> sys = servo_system(model, w, h, box);
-  const double area = box.len[1] * box.len[2];
-  double xs = 0;
-  auto set_speed = [&](double v) {  // source wall moving at v (into the sample) from now on
-    auto walls = column_walls(w, box, xs);
-    walls[0].motion = WallMotion::Velocity;
-    walls[0].velocity[0] = v;
-    walls[0].point[0] = xs - v * sys.time();
-    sys.set_walls(walls);
-  };
-  set_speed(0.0);
+  WaveServo<Model> servo(model, w, h, box);
   std::vector<Prepared> out;
-  const long max_steps = static_cast<long>(w.max_time / w.dt);
   for (double target : w.pressures) {
-    Progress progress("servo to " + std::to_string(target) + " MPa", max_steps, opts.progress);
-    long steps = 0;
-    double sigma = wall_stress(sys.wall_loads(), area);
-    std::vector<std::pair<double, double>> held;  // (gap, sigma_xx) of each held state
-    auto advance = [&](double time) {
-      const long n = std::max<long>(1, static_cast<long>(std::ceil(time / w.dt)));
-      sys.step(n);
-      steps += n;
-      xs = sys.walls().host()(0).p[0];
-      sys.check_health(sys.measure());
-      sigma = wall_stress(sys.wall_loads(), area);
-      progress.update(steps);
-      if (steps > max_steps) {
-        // The last held states say whether the servo oscillated, crept or never loaded.
-        std::ostringstream last;
-        last.precision(6);
-        const size_t from = held.size() > 8 ? held.size() - 8 : 0;
-        for (size_t k = from; k < held.size(); ++k)
-          last << (k > from ? ", " : "") << "gap " << held[k].first << " mm: " << held[k].second;
-        throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target) +
-                           " MPa within preparation.max_time (now " + std::to_string(sigma) +
-                           " MPa after " + std::to_string(held.size()) +
-                           " held states; the last: " + last.str() +
-                           "): raise it, or preparation.wall_speed");
-      }
-    };
-    // A gas has no stiffness to aim with, and its wall force is a train of collisions: the
-    // wall runs at wall_speed until the volume fraction reaches gas_end_phi, whatever the
-    // force says.
-    const double vp = sys.particle_volume();
-    while (vp / ((box.len[0] - xs) * area) < w.gas_end_phi) {
-      set_speed(w.wall_speed);
-      advance(0.5 * w.damping_time);
-    }
-    // Then held states only: hold for relax_time, measure, and move the wall by 0.7 of the
-    // secant estimate from the last two held states (a fixed small push while the packing
-    // carries no load or the secant is not yet defined), at most max_push of the gap. A held
-    // state near the target must stay there over final_relax_time.
-    //
-    // Where it does not, the packing creeps: the stress read after relax_time was the push's
-    // transient, and at a fixed wall it decays (in the full column at 0.05 MPa, from the
-    // target to 0.002 MPa over 1000 us) while the packing consolidates. Held states then
-    // only inch towards jamming. From there on the wall is a piston of the sample's mass
-    // pushed by the target stress: it follows the consolidation as it happens, and it comes
-    // to rest only where the packing carries the target (the particles' damping takes the
-    // energy out). Each relax_time the piston is judged like a held state, at rest.
-    double x_prev = NAN, s_prev = NAN;
-    bool piston = false;
-    const double mw = sample_mass(h);
-    while (!piston) {
-      set_speed(0.0);
-      advance(w.relax_time);
-      held.emplace_back(box.len[0] - xs, sigma);
-      if (std::abs(target - sigma) < w.tolerance * target) {
-        advance(w.final_relax_time);  // and still there after a long relaxation
-        if (std::abs(target - sigma) < w.tolerance * target) break;
-        piston = true;
-        break;
-      }
-      const double gap = box.len[0] - xs, dmax = w.max_push * gap;
-      double dx = sigma > 0 ? 0.5 * dmax : dmax;
-      const double slope =
-          std::isfinite(s_prev) && xs != x_prev ? (sigma - s_prev) / (xs - x_prev) : 0;
-      if (slope > 0 && sigma > 0)
-        dx = 0.7 * (target - sigma) / slope;
-      else if (sigma > target)
-        dx = -0.5 * dmax;
-      dx = std::clamp(dx, -dmax, dmax);
-      x_prev = xs, s_prev = sigma;
-      const double v = std::copysign(std::min(w.wall_speed, std::abs(dx) / w.damping_time), dx);
-      set_speed(v);
-      advance(dx / v);
-    }
-    if (piston) {
-      const double tick = 0.1 * w.damping_time;
-      double vw = 0, peak = 0;
-      while (true) {
-        double moved = 0, mean = 0;
-        const int ticks = std::max(1, static_cast<int>(std::lround(w.relax_time / tick)));
-        for (int k = 0; k < ticks; ++k) {
-          vw += tick * (target - sigma) * area / mw;
-          set_speed(vw);
-          const double x0 = xs;
-          advance(tick);
-          moved += std::abs(xs - x0), mean += sigma / ticks;
-        }
-        held.emplace_back(box.len[0] - xs, mean);
-        // At rest: a piston that still travels carries a flow's drag, not a packing's load (a
-        // steady creep at 6e-5 mm/us read as the target while the packing held 0.0025 MPa).
-        peak = std::max(peak, moved);
-        if (std::abs(target - mean) < w.tolerance * target && moved < 0.1 * peak) {
-          set_speed(0.0), vw = 0;
-          advance(w.final_relax_time);
-          if (std::abs(target - sigma) < w.tolerance * target) break;
-        }
-      }
-    }
-    set_speed(0.0);
-    progress.finish();
-    Prepared p;
-    p.xs = xs, p.pressure = sigma, p.steps = steps;
-    p.gap = box.len[0] - xs;
-    const Measurements m = sys.measure();
-    p.phi = sys.particle_volume() / (p.gap * area);
-    double mass = 0, vol = 0;
-    for (int i = 0; i < h.size(); ++i) {
-      const double v = 4.0 / 3 * M_PI * std::pow(h.radius[i], 3);
-      mass += density[i] * v, vol += v;
-    }
-    p.rho_bulk = mass / (p.gap * area);
-    p.rho_solid = mass / vol;
-    // measure() divides by the box volume, which includes the empty part behind the wall
-    const double vbox = box.len[0] * area;
-    p.lateral_ratio = 0.5 * (m.stress[1] + m.stress[2]) * vbox / (p.gap * area) / sigma;
-    p.z = m.z, p.max_overlap = m.max_overlap;
-    p.state = snapshot(sys, density, sigma);
-    std::cout << "prepared sigma_xx = " << sigma << " MPa: phi = " << p.phi << ", Z = " << m.z
-              << ", sigma_lat/sigma_xx = " << p.lateral_ratio << ", L = " << p.gap << " mm\n";
-    out.push_back(std::move(p));
+    servo.reach(target, opts);
+    out.push_back(prepared_state(servo, density, h, box));
   }
   return out;
 }
@@ -634,6 +692,16 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
     row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
     row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
+    // The pulse runs through the load-bearing skeleton, whose density is rho_bulk (1 - f), f
+    // the mass fraction of rattlers peeled below 2 contacts (skeleton.hpp: without gravity a
+    // particle with one contact carries no load). Peeling below 4 takes every particle of
+    // these frictional packings (Z = 4.1-4.3), so 4 is no criterion here.
+    const double f_rattlers = rattler_mass_fraction(p.state, p.xs, box.len[0], 2);
+    Json skeleton = Json::object();
+    skeleton["rattler_mass_fraction"] = f_rattlers;
+    skeleton["M_wave_over_M_probe"] =
+        std::isfinite(m_wave) ? Json(m_wave * (1 - f_rattlers) / m_probe) : Json();
+    row["skeleton"] = skeleton;
     std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
               << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
               << "\n";
