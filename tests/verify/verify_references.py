@@ -39,10 +39,10 @@ SLOW = ["confined_compression_quick", "wave_transmission_quick",
         "moduli_tangential_stiffness_quick", "cohesion_list_quick", "reversibility_quick",
         "keep_friction_probes_quick", "jamming_friction_quick",
         "amplitude_sweep_friction_quick"]
-# Full scenes whose reference the current code reproduces, of tens of minutes each: the
+# Full scenes whose reference the current code reproduces, of minutes each: the
 # `long` label (ctest -L long). A full scene joins this list once its reference is
 # regenerated and verified.
-FULL = ["wave_transmission"]
+FULL = ["wave_transmission", "confined_compression_hydrogel", "confined_compression_rubber"]
 
 SKIPPED_KEYS = ("seconds", "per_second", "started_utc", "finished_utc")
 
