@@ -44,8 +44,9 @@ def flatten(value, at, out):
             out[at] = float(value)
 
 
-def with_seed(text, table, key, seed):
-    """The scene text with key = seed inside [table] (added at the table's top if absent)."""
+def with_key(text, table, key, value):
+    """The scene text with key = value inside [table] (added at the table's top if absent;
+    removed where value is None)."""
     lines = text.splitlines()
     head = re.compile(r"^\s*\[([^\]]+)\]")
     inside, start = False, None
@@ -57,12 +58,21 @@ def with_seed(text, table, key, seed):
                 start = i
             continue
         if inside and re.match(rf"^\s*{re.escape(key)}\s*=", line):
-            lines[i] = f"{key} = {seed}"
+            if value is None:
+                del lines[i]
+            else:
+                lines[i] = f"{key} = {value}"
             return "\n".join(lines) + "\n"
     if start is None:
         raise SystemExit(f"the scene has no [{table}] table for {table}.{key}")
-    lines.insert(start + 1, f"{key} = {seed}")
+    if value is not None:
+        lines.insert(start + 1, f"{key} = {value}")
     return "\n".join(lines) + "\n"
+
+
+def with_seed(text, table, key, seed):
+    """The scene text with key = seed inside [table] (added at the table's top if absent)."""
+    return with_key(text, table, key, seed)
 
 
 def mean_se(values):
