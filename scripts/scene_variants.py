@@ -19,12 +19,11 @@ import argparse
 import fnmatch
 import json
 import re
-import subprocess
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from seed_spread import flatten, with_key  # noqa: E402  (one rule for both scripts)
+from seed_spread import flatten, run_copy, with_key  # noqa: E402  (one rule for both scripts)
 
 
 def parse_variant(spec):
@@ -64,18 +63,11 @@ def main():
             changed = text
             for table, key, value in keys:
                 changed = with_key(changed, table, key, value)
-            copy = scene.with_name(f".{scene.stem}_variant_{name}.toml")
-            copy.write_text(changed)
-            cmd = [args.granular, "run", str(copy), "--out", str(out / name), "--quiet"]
-            if args.threads:
-                cmd += ["--threads", str(args.threads)]
-            try:
-                proc = subprocess.run(cmd, capture_output=True, text=True)
-            finally:
-                copy.unlink()
-            if proc.returncode != 0:
-                failed[name] = (proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:]
-                print(f"{name}: exit {proc.returncode}: {failed[name]}", flush=True)
+            error = run_copy(args.granular, scene, changed, f"variant_{name}", out / name,
+                             args.threads)
+            if error:
+                failed[name] = error
+                print(f"{name}: {error[0]}", flush=True)
                 continue
         runs[name] = {}
         flatten(json.loads(summary.read_text()), "", runs[name])

@@ -75,6 +75,24 @@ def with_seed(text, table, key, seed):
     return with_key(text, table, key, seed)
 
 
+def run_copy(granular, scene, text, tag, outdir, threads):
+    """Runs `text` as a copy of `scene` beside it (relative input paths keep their meaning),
+    into `outdir`; the copy is removed afterwards. Returns None, or [the failure's last line]."""
+    copy = scene.with_name(f".{scene.stem}_{tag}.toml")
+    copy.write_text(text)
+    cmd = [granular, "run", str(copy), "--out", str(outdir), "--quiet"]
+    if threads:
+        cmd += ["--threads", str(threads)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+    finally:
+        copy.unlink()
+    if proc.returncode == 0:
+        return None
+    last = (proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:]
+    return [f"exit {proc.returncode}: " + " ".join(last)]
+
+
 def mean_se(values):
     n = len(values)
     m = sum(values) / n
@@ -143,18 +161,11 @@ def main():
             flatten(json.loads(summary.read_text()), "", runs[seed])
             print(f"seed {seed}: reused", flush=True)
             continue
-        copy = scene.with_name(f".{scene.stem}_seed_{seed}.toml")
-        copy.write_text(with_seed(text, table, key, seed))
-        cmd = [args.granular, "run", str(copy), "--out", str(out / f"seed_{seed}"), "--quiet"]
-        if args.threads:
-            cmd += ["--threads", str(args.threads)]
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True)
-        finally:
-            copy.unlink()
-        if proc.returncode != 0:
-            failed[seed] = (proc.stderr.strip() or proc.stdout.strip()).splitlines()[-1:]
-            print(f"seed {seed}: exit {proc.returncode}: {failed[seed]}", flush=True)
+        error = run_copy(args.granular, scene, with_seed(text, table, key, seed), f"seed_{seed}",
+                         out / f"seed_{seed}", args.threads)
+        if error:
+            failed[seed] = error
+            print(f"seed {seed}: {error[0]}", flush=True)
             continue
         values = {}
         flatten(json.loads((out / f"seed_{seed}" / "summary.json").read_text()), "", values)
