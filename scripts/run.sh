@@ -3,9 +3,9 @@
 # 4096 spheres). Extra arguments go to `granular run` (e.g. --threads 2, --out DIR).
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-# Only the engine itself: the tests and benchmarks are the test command's (about nine
-# minutes of a first build on two cores).
-GRANULAR_TARGETS=${GRANULAR_TARGETS:-granular} "$repo/scripts/setup.sh"
+# Only the engine and its Python package: the tests and benchmarks are the test command's
+# (about nine minutes of a first build on two cores).
+GRANULAR_TARGETS=${GRANULAR_TARGETS:-granular granular_python} "$repo/scripts/setup.sh"
 scene=${GRANULAR_SCENE:-$repo/scenarios/packings/isotropic_compression.toml}
 cd "$repo"
 exec "${GRANULAR_BUILD:-$repo/build}/bin/granular" run "$scene" "$@"

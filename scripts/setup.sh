@@ -35,7 +35,8 @@ as_root() {
 # ---- 1. Debian packages ------------------------------------------------------------
 packages=(build-essential g++ cmake make pkg-config ca-certificates gnupg
   libeigen3-dev libhdf5-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
-  libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy)
+  libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy
+  python3-dev pybind11-dev python3-pytest)
 if [ "${GRANULAR_MPI:-1}" != 0 ]; then
   packages+=(libopenmpi-dev openmpi-bin)
 fi
@@ -106,14 +107,19 @@ build_kokkos() {
   rm -rf "$bdir"
 }
 
-kokkos_host=$cache/kokkos-$kokkos_version-openmp-serial
-build_kokkos "$kokkos_host" -DKokkos_ENABLE_OPENMP=ON -DKokkos_ENABLE_SERIAL=ON
+# Position-independent, so that the Python module (a shared object) can link the engine.
+kokkos_host=$cache/kokkos-$kokkos_version-openmp-serial-pic
+build_kokkos "$kokkos_host" -DKokkos_ENABLE_OPENMP=ON -DKokkos_ENABLE_SERIAL=ON \
+  -DCMAKE_POSITION_INDEPENDENT_CODE=ON
 
 # ---- 3. The project ------------------------------------------------------------------
 if [ "${GRANULAR_SKIP_BUILD:-0}" != 1 ]; then
-  if [ ! -f "$build/CMakeCache.txt" ]; then
+  # A build folder configured against another Kokkos (an older cache layout) is reconfigured.
+  if [ ! -f "$build/CMakeCache.txt" ] ||
+    ! grep -q "^Kokkos_DIR:PATH=$kokkos_host/" "$build/CMakeCache.txt"; then
     say "configuring the project in $build"
     cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release -DKokkos_ROOT="$kokkos_host" \
+      -DKokkos_DIR="$kokkos_host/lib/cmake/Kokkos" \
       -DGRANULAR_MPI="$([ "${GRANULAR_MPI:-1}" != 0 ] && echo ON || echo OFF)" >/dev/null
   fi
   targets=()

@@ -17,6 +17,8 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 ALLOWED = {
     # The mixture study probes its states with the moduli family's element tests.
     ("scenarios/waves/scene_mixture_moduli.cpp", "scenarios/moduli/"),
+    # The Python module is the front of the library API, as main.cpp is of the registry.
+    ("scenarios/python/module.cpp", "scenarios/api/"),
 }
 
 
