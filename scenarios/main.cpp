@@ -12,6 +12,7 @@
 #include "granular_config.hpp"
 #include "kernels/cpu/force_slabs.hpp"
 #include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_keys.hpp"
 #include "scenarios/moduli/moduli_theory.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -69,6 +70,13 @@ int main(int argc, char** argv) {
 
   auto* list = app.add_subcommand("scenes", "list the scene drivers");
 
+  auto* keys = app.add_subcommand(
+      "keys", "every key a scene reads: kind, default, checked rules, example, meaning");
+  std::string keys_scene;
+  bool keys_json = false;
+  keys->add_option("scene", keys_scene, "scene name (its shipped files) or scene file")->required();
+  keys->add_flag("--json", keys_json, "as JSON (a schema of the scene's keys)");
+
   auto* theory = app.add_subcommand("theory", "EMT and fluctuation-theory moduli (JSON)");
   granular::TheoryInput tin;
   theory->add_option("--phi", tin.phi, "volume fraction")->required()->check(CLI::Range(0.0, 1.0));
@@ -102,7 +110,7 @@ int main(int argc, char** argv) {
     std::cout << j.dump();
     return 0;
   }
-  if (!run->parsed() && !check->parsed()) {
+  if (!run->parsed() && !check->parsed() && !keys->parsed()) {
     std::cout << app.help();
     return 0;
   }
@@ -129,6 +137,17 @@ int main(int argc, char** argv) {
   }
 #endif
   int rc = 0;
+  if (keys->parsed()) {
+    try {
+      const granular::SceneKeys k = granular::scene_keys(keys_scene);
+      std::cout << (keys_json ? k.json().dump() + "\n" : k.table());
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      rc = 2;
+    }
+    Kokkos::finalize();
+    return rc;
+  }
   try {
     const bool checking = check->parsed();
     if (checking) scene_path = check_path;

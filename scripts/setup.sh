@@ -36,7 +36,8 @@ as_root() {
 packages=(build-essential g++ cmake make pkg-config ca-certificates gnupg
   libeigen3-dev libhdf5-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-h5py python3-numpy
-  python3-dev pybind11-dev python3-pytest)
+  python3-dev pybind11-dev python3-pytest
+  lammps python3-mdanalysis)  # the clients the data-format tests read the engine's files with
 if [ "${GRANULAR_MPI:-1}" != 0 ]; then
   packages+=(libopenmpi-dev openmpi-bin)
 fi

@@ -30,6 +30,34 @@ TEST(SceneFile, UnknownKeyIsRejectedNamingKeyAndFile) {
   EXPECT_NE(msg.find("demo.toml"), std::string::npos) << msg;
 }
 
+TEST(SceneFile, UnknownKeyNearAKnownOneSuggestsIt) {
+  const auto s = SceneFile::parse("[contact]\nkn = 1.0\ngama_n = 2.0\n", "a.toml");
+  s.real("contact.kn");
+  s.real("contact.gamma_n", 0.0);  // read with its default: the file's spelling is unknown
+  std::string msg = error_of([&] { s.reject_unknown_keys(); });
+  EXPECT_NE(msg.find("unknown key 'contact.gama_n' (did you mean 'contact.gamma_n'?)"),
+            std::string::npos)
+      << msg;
+  // Nothing near enough: no suggestion, the general advice.
+  const auto t = SceneFile::parse("[contact]\nkn = 1.0\nstiffness = 2.0\n", "b.toml");
+  t.real("contact.kn");
+  msg = error_of([&] { t.reject_unknown_keys(); });
+  EXPECT_EQ(msg.find("did you mean"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("misspelt, or not used by this scene"), std::string::npos) << msg;
+}
+
+TEST(SceneFile, MissingKeyNamesTheMisspellingInTheFile) {
+  const auto s = SceneFile::parse("[contact]\nkn = 1.0\nshear_modulu = 29e3\n", "c.toml");
+  s.real("contact.kn");
+  const std::string msg = error_of([&] { s.real("contact.shear_modulus"); });
+  EXPECT_NE(msg.find("'contact.shear_modulus' is missing"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("the file has 'contact.shear_modulu': misspelt?"), std::string::npos) << msg;
+  // A key already read is not offered as the misspelling of another.
+  const auto t = SceneFile::parse("[contact]\nkn = 1.0\n", "d.toml");
+  t.real("contact.kn");
+  EXPECT_EQ(error_of([&] { t.real("contact.kt"); }).find("misspelt?"), std::string::npos);
+}
+
 TEST(SceneFile, MissingAndMistypedKeysNameTheKey) {
   const auto s = SceneFile::parse("[run]\ndt = \"fast\"\nsteps = 1.5\n", "bad.toml");
   std::string msg = error_of([&] { s.real("run.skin"); });

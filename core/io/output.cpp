@@ -382,32 +382,135 @@ void H5Writer::write(const std::string& name, const std::vector<int>& data,
   write_raw(name, H5T_NATIVE_INT, data.data(), dims);
 }
 
-void H5Writer::attribute(const std::string& object, const std::string& name, double value) {
+void H5Writer::attribute_raw(const std::string& object, const std::string& name, hid_t type,
+                             hid_t space, const void* data) {
   if (object != "/") group_for(object + "/x");
-  hid_t space = H5Screate(H5S_SCALAR);
-  hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), H5T_NATIVE_DOUBLE, space,
-                                 H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  const herr_t st = attr < 0 ? -1 : H5Awrite(attr, H5T_NATIVE_DOUBLE, &value);
+  hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), type, space, H5P_DEFAULT,
+                                 H5P_DEFAULT, H5P_DEFAULT);
+  const herr_t st = attr < 0 ? -1 : H5Awrite(attr, type, data);
   if (attr >= 0) H5Aclose(attr);
   H5Sclose(space);
   if (st < 0)
     throw std::runtime_error("cannot write attribute " + object + "@" + name + " in " + partial_);
 }
 
+void H5Writer::attribute(const std::string& object, const std::string& name, double value) {
+  attribute_raw(object, name, H5T_NATIVE_DOUBLE, H5Screate(H5S_SCALAR), &value);
+}
+
 void H5Writer::attribute(const std::string& object, const std::string& name,
                          const std::string& value) {
-  if (object != "/") group_for(object + "/x");
   hid_t type = H5Tcopy(H5T_C_S1);
   H5Tset_size(type, value.size() + 1);
-  hid_t space = H5Screate(H5S_SCALAR);
-  hid_t attr = H5Acreate_by_name(file_, object.c_str(), name.c_str(), type, space, H5P_DEFAULT,
-                                 H5P_DEFAULT, H5P_DEFAULT);
-  const herr_t st = attr < 0 ? -1 : H5Awrite(attr, type, value.c_str());
-  if (attr >= 0) H5Aclose(attr);
-  H5Sclose(space);
+  try {
+    attribute_raw(object, name, type, H5Screate(H5S_SCALAR), value.c_str());
+  } catch (...) {
+    H5Tclose(type);
+    throw;
+  }
   H5Tclose(type);
-  if (st < 0)
-    throw std::runtime_error("cannot write attribute " + object + "@" + name + " in " + partial_);
+}
+
+void H5Writer::attribute(const std::string& object, const std::string& name,
+                         const std::vector<int>& values) {
+  const hsize_t n = values.size();
+  attribute_raw(object, name, H5T_NATIVE_INT, H5Screate_simple(1, &n, nullptr), values.data());
+}
+
+void H5Writer::attribute_utf8(const std::string& object, const std::string& name,
+                              const std::string& value) {
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, H5T_VARIABLE);
+  H5Tset_cset(type, H5T_CSET_UTF8);
+  const char* text = value.c_str();
+  try {
+    attribute_raw(object, name, type, H5Screate(H5S_SCALAR), &text);
+  } catch (...) {
+    H5Tclose(type);
+    throw;
+  }
+  H5Tclose(type);
+}
+
+void H5Writer::attribute_int(const std::string& object, const std::string& name, int value) {
+  attribute_raw(object, name, H5T_NATIVE_INT, H5Screate(H5S_SCALAR), &value);
+}
+
+void H5Writer::attribute(const std::string& object, const std::string& name,
+                         const std::vector<std::string>& values) {
+  // Fixed-length strings, each padded to the longest (as h5py writes a list of str).
+  size_t width = 1;
+  for (const std::string& v : values) width = std::max(width, v.size() + 1);
+  std::vector<char> packed(width * values.size(), '\0');
+  for (size_t k = 0; k < values.size(); ++k)
+    std::copy(values[k].begin(), values[k].end(), packed.begin() + static_cast<long>(k * width));
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, width);
+  const hsize_t n = values.size();
+  try {
+    attribute_raw(object, name, type, H5Screate_simple(1, &n, nullptr), packed.data());
+  } catch (...) {
+    H5Tclose(type);
+    throw;
+  }
+  H5Tclose(type);
+}
+
+void H5Writer::append_raw(const std::string& name, hid_t type, const void* data, size_t count,
+                          std::vector<hsize_t> row_dims) {
+  hsize_t row = 1;
+  for (hsize_t d : row_dims) row *= d;
+  if (row != count)
+    throw std::runtime_error("time series " + name + ": a row of " + std::to_string(count) +
+                             " values for a shape of " + std::to_string(row));
+  std::vector<hsize_t> dims = {0}, max = {H5S_UNLIMITED}, chunk = {1};
+  for (hsize_t d : row_dims) dims.push_back(d), max.push_back(d), chunk.push_back(d);
+  hid_t set = -1;
+  if (H5Lexists(group_for(name), name.c_str(), H5P_DEFAULT) > 0) {
+    set = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+  } else {
+    hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), max.data());
+    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(plist, static_cast<int>(chunk.size()), chunk.data());
+    set = H5Dcreate2(file_, name.c_str(), type, space, H5P_DEFAULT, plist, H5P_DEFAULT);
+    H5Pclose(plist);
+    H5Sclose(space);
+  }
+  if (set < 0) throw std::runtime_error("cannot create time series " + name + " in " + partial_);
+  hid_t space = H5Dget_space(set);
+  std::vector<hsize_t> now(dims.size());
+  H5Sget_simple_extent_dims(space, now.data(), nullptr);
+  H5Sclose(space);
+  std::vector<hsize_t> grown = now, start(dims.size(), 0), shape = dims;
+  grown[0] += 1;
+  start[0] = now[0];
+  shape[0] = 1;
+  herr_t st = H5Dset_extent(set, grown.data());
+  hid_t file_space = H5Dget_space(set);
+  hid_t mem_space = H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr);
+  if (st >= 0)
+    st = H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, shape.data(),
+                             nullptr);
+  if (st >= 0) st = H5Dwrite(set, type, mem_space, file_space, H5P_DEFAULT, data);
+  H5Sclose(mem_space);
+  H5Sclose(file_space);
+  H5Dclose(set);
+  if (st < 0) throw std::runtime_error("cannot extend time series " + name + " in " + partial_);
+}
+
+void H5Writer::append(const std::string& name, const std::vector<double>& row,
+                      std::vector<hsize_t> row_dims) {
+  append_raw(name, H5T_NATIVE_DOUBLE, row.data(), row.size(), std::move(row_dims));
+}
+
+void H5Writer::append(const std::string& name, const std::vector<int>& row,
+                      std::vector<hsize_t> row_dims) {
+  append_raw(name, H5T_NATIVE_INT, row.data(), row.size(), std::move(row_dims));
+}
+
+void H5Writer::append(const std::string& name, const std::vector<long>& row,
+                      std::vector<hsize_t> row_dims) {
+  append_raw(name, H5T_NATIVE_LONG, row.data(), row.size(), std::move(row_dims));
 }
 
 void H5Writer::commit() {

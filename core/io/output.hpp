@@ -92,11 +92,31 @@ class H5Writer {
   void write(const std::string& name, const std::vector<int>& data, std::vector<hsize_t> dims = {});
   void attribute(const std::string& object, const std::string& name, double value);
   void attribute(const std::string& object, const std::string& name, const std::string& value);
+  void attribute(const std::string& object, const std::string& name,
+                 const std::vector<int>& values);
+  void attribute_int(const std::string& object, const std::string& name, int value);
+  // A variable-length UTF-8 string (h5py reads it as str; the other string attributes are
+  // fixed-length ASCII, which h5py reads as bytes): what H5MD readers expect of units.
+  void attribute_utf8(const std::string& object, const std::string& name, const std::string& value);
+  void attribute(const std::string& object, const std::string& name,
+                 const std::vector<std::string>& values);
+  // A time series: `row` (of shape row_dims; empty: a scalar) becomes the next entry along a
+  // first, growing dimension of dataset `name` (chunked, created by the first call).
+  void append(const std::string& name, const std::vector<double>& row,
+              std::vector<hsize_t> row_dims = {});
+  void append(const std::string& name, const std::vector<int>& row,
+              std::vector<hsize_t> row_dims = {});
+  void append(const std::string& name, const std::vector<long>& row,
+              std::vector<hsize_t> row_dims = {});
   void commit();  // close and rename into place
 
  private:
   hid_t group_for(const std::string& dataset_name);
   void write_raw(const std::string& name, hid_t type, const void* data, std::vector<hsize_t> dims);
+  void append_raw(const std::string& name, hid_t type, const void* data, size_t count,
+                  std::vector<hsize_t> row_dims);
+  void attribute_raw(const std::string& object, const std::string& name, hid_t type, hid_t space,
+                     const void* data);
   std::string path_, partial_;
   hid_t file_ = -1;
   int fd_ = -1;  // the partial file, written by commit()

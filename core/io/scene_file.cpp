@@ -1,6 +1,7 @@
 // Strict TOML scene reader (see scene_file.hpp).
 #include "core/io/scene_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -56,11 +57,71 @@ SceneFile SceneFile::parse(const std::string& text, const std::string& source_na
 
 const void* SceneFile::find(const std::string& key) const { return doc_->root.at_path(key).node(); }
 
+namespace {
+// Edits (insertions, deletions, substitutions) that turn a into b.
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1])});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The candidate nearest to `key` if it is near enough to be a misspelling of it: at most a
+// quarter of the key's length in edits (at least 2), and no other candidate as near.
+std::string nearest(const std::string& key, const std::vector<std::string>& candidates) {
+  const size_t limit = std::max<size_t>(2, key.size() / 4);
+  std::string best;
+  size_t best_d = limit + 1;
+  bool tie = false;
+  for (const std::string& c : candidates) {
+    if (c == key) continue;
+    const size_t d = edit_distance(key, c);
+    if (d < best_d)
+      best = c, best_d = d, tie = false;
+    else if (d == best_d)
+      tie = true;
+  }
+  return tie ? std::string() : best;
+}
+
+// Every leaf key of a TOML table, dotted.
+void leaf_keys(const toml::table& t, const std::string& prefix, std::vector<std::string>& out) {
+  for (const auto& [k, node] : t) {
+    const std::string key =
+        prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (const toml::table* sub = node.as_table())
+      leaf_keys(*sub, key, out);
+    else
+      out.push_back(key);
+  }
+}
+}  // namespace
+
 void SceneFile::fail(const std::string& key, const std::string& what) const {
-  throw InputError("scene file " + path_ + ": key '" + key + "' " + what);
+  std::string hint;
+  if (!find(key)) {  // a missing key: is one in the file a misspelling of it?
+    std::vector<std::string> present;
+    leaf_keys(doc_->root, "", present);
+    present.erase(std::remove_if(present.begin(), present.end(),
+                                 [&](const std::string& k) { return used_.count(k) > 0; }),
+                  present.end());
+    const std::string near = nearest(key, present);
+    if (!near.empty()) hint = " (the file has '" + near + "': misspelt?)";
+  }
+  throw InputError("scene file " + path_ + ": key '" + key + "' " + what + hint);
 }
 
 void SceneFile::require(bool ok, const std::string& key, const std::string& what) const {
+  auto& rules = facts_[key].rules;
+  if (std::find(rules.begin(), rules.end(), what) == rules.end()) rules.push_back(what);
   if (!ok) fail(key, what);
 }
 
@@ -107,6 +168,11 @@ int SceneFile::count(const std::string& key, long min, double bytes_each) const 
 }
 
 void SceneFile::note(const std::string& key, const std::string& value) const { used_[key] = value; }
+void SceneFile::kind(const std::string& key, const char* k) const { facts_[key].kind = k; }
+void SceneFile::offer(const std::string& key, const std::string& default_value) const {
+  facts_[key].default_value = default_value;
+  facts_[key].has_default = true;
+}
 
 bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
 
@@ -126,6 +192,7 @@ std::vector<std::string> SceneFile::tables(const std::string& key) const {
 }
 
 double SceneFile::real_or_infinite(const std::string& key) const {
+  kind(key, "number");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a number is required)");
   if (auto v = n->value<double>()) {  // integers convert too
@@ -138,6 +205,7 @@ double SceneFile::real_or_infinite(const std::string& key) const {
 }
 
 double SceneFile::real(const std::string& key) const {
+  kind(key, "number");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a number is required)");
   if (auto v = n->value<double>()) {  // integers convert too
@@ -149,6 +217,7 @@ double SceneFile::real(const std::string& key) const {
 }
 
 long SceneFile::integer(const std::string& key) const {
+  kind(key, "integer");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an integer is required)");
   if (auto v = n->value_exact<int64_t>()) {
@@ -159,6 +228,7 @@ long SceneFile::integer(const std::string& key) const {
 }
 
 std::string SceneFile::text(const std::string& key) const {
+  kind(key, "string");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (a string is required)");
   if (auto v = n->value_exact<std::string>()) {
@@ -169,6 +239,7 @@ std::string SceneFile::text(const std::string& key) const {
 }
 
 bool SceneFile::flag(const std::string& key) const {
+  kind(key, "flag");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (true or false is required)");
   if (auto v = n->value_exact<bool>()) {
@@ -179,6 +250,7 @@ bool SceneFile::flag(const std::string& key) const {
 }
 
 std::vector<double> SceneFile::reals(const std::string& key) const {
+  kind(key, "numbers");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an array of numbers is required)");
   const toml::array* a = n->as_array();
@@ -198,6 +270,7 @@ std::vector<double> SceneFile::reals(const std::string& key) const {
 }
 
 std::vector<std::string> SceneFile::texts(const std::string& key) const {
+  kind(key, "strings");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an array of strings is required)");
   const toml::array* a = n->as_array();
@@ -218,6 +291,8 @@ std::vector<std::string> SceneFile::texts(const std::string& key) const {
 }
 
 double SceneFile::real(const std::string& key, double def) const {
+  offer(key, format_real(def));
+  kind(key, "number");
   if (find(key)) return real(key);
   note(key, format_real(def));
   return def;
@@ -229,16 +304,22 @@ int SceneFile::small_integer(const std::string& key) const {
   return static_cast<int>(v);
 }
 int SceneFile::small_integer(const std::string& key, int def) const {
+  offer(key, std::to_string(def));
+  kind(key, "integer");
   if (find(key)) return small_integer(key);
   note(key, std::to_string(def));
   return def;
 }
 long SceneFile::integer(const std::string& key, long def) const {
+  offer(key, std::to_string(def));
+  kind(key, "integer");
   if (find(key)) return integer(key);
   note(key, std::to_string(def));
   return def;
 }
 std::string SceneFile::text(const std::string& key, const std::string& def) const {
+  offer(key, "\"" + def + "\"");
+  kind(key, "string");
   if (find(key)) return text(key);
   note(key, "\"" + def + "\"");
   return def;
@@ -266,19 +347,25 @@ std::string SceneFile::input_path(const std::string& key, bool folder) const {
   return resolved;
 }
 std::string SceneFile::optional_input_path(const std::string& key, bool folder) const {
+  offer(key, "\"\"");
+  kind(key, "string");
   if (find(key)) return input_path(key, folder);
   note(key, "\"\"");
   return std::string();
 }
 bool SceneFile::flag(const std::string& key, bool def) const {
+  offer(key, def ? "true" : "false");
+  kind(key, "flag");
   if (find(key)) return flag(key);
   note(key, def ? "true" : "false");
   return def;
 }
 std::vector<double> SceneFile::reals(const std::string& key, const std::vector<double>& def) const {
-  if (find(key)) return reals(key);
   std::string text = "[";
   for (size_t i = 0; i < def.size(); ++i) text += (i ? ", " : "") + format_real(def[i]);
+  offer(key, text + "]");
+  kind(key, "numbers");
+  if (find(key)) return reals(key);
   note(key, text + "]");
   return def;
 }
@@ -295,8 +382,13 @@ void SceneFile::reject_unknown_keys() const {
       if (const toml::table* sub = node.as_table()) {
         stack.emplace_back(key, sub);
       } else if (!used_.count(key)) {
-        throw InputError("scene file " + path_ + ": unknown key '" + key +
-                         "' (misspelt, or not used by this scene)");
+        std::vector<std::string> known;
+        for (const auto& u : used_) known.push_back(u.first);
+        const std::string near = nearest(key, known);
+        throw InputError("scene file " + path_ + ": unknown key '" + key + "' (" +
+                         (near.empty() ? std::string("misspelt, or not used by this scene")
+                                       : "did you mean '" + near + "'?") +
+                         ")");
       }
     }
   }

@@ -71,6 +71,16 @@ class SceneFile {
   // Every value read so far (key -> value as text), for summary.json.
   const std::map<std::string, std::string>& used() const { return used_; }
 
+  // What the readers said of each key so far (`granular keys`): its kind (number, integer,
+  // string, flag, numbers, strings), its default where it has one, and the rules checked
+  // on it by require() (e.g. "must be positive").
+  struct KeyFacts {
+    std::string kind, default_value;
+    bool has_default = false;
+    std::vector<std::string> rules;
+  };
+  const std::map<std::string, KeyFacts>& facts() const { return facts_; }
+
   // A range check with the same style of message.
   void require(bool ok, const std::string& key, const std::string& what) const;
   // A list whose entries name outputs (variants, models, targets) must not repeat one: the
@@ -89,10 +99,13 @@ class SceneFile {
   const void* find(const std::string& key) const;
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
   void note(const std::string& key, const std::string& value) const;
+  void kind(const std::string& key, const char* kind) const;
+  void offer(const std::string& key, const std::string& default_value) const;
 
   std::string path_;
   std::shared_ptr<Document> doc_;
   mutable std::map<std::string, std::string> used_;
+  mutable std::map<std::string, KeyFacts> facts_;
 };
 
 }  // namespace granular

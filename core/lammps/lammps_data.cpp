@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -169,6 +170,45 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
     throw InputError(path + ": Velocities names atom " + std::to_string(vels.id[vel_by_id[q]]) +
                      ", which is not in Atoms");
   return out;
+}
+
+std::string lammps_data_text(const HostParticles& h, const double lo[3], const double len[3],
+                             const std::vector<long>& ids, double length_scale, double time_scale,
+                             double mass_scale) {
+  const int n = h.size();
+  if (!ids.empty() && static_cast<int>(ids.size()) != n)
+    throw InputError("LAMMPS data file: " + std::to_string(ids.size()) + " ids for " +
+                     std::to_string(n) + " atoms");
+  int types = 1;
+  for (int i = 0; i < n; ++i) types = std::max(types, h.species[i] + 1);
+  const double vscale = time_scale / length_scale,
+               dscale = length_scale * length_scale * length_scale / mass_scale;
+  char buf[512];
+  std::string o = "LAMMPS data file (atom style sphere), written by granular\n\n";
+  o += std::to_string(n) + " atoms\n" + std::to_string(types) + " atom types\n\n";
+  const char* axis[3] = {"x", "y", "z"};
+  for (int d = 0; d < 3; ++d) {
+    std::snprintf(buf, sizeof buf, "%.17g %.17g %slo %shi\n", lo[d] / length_scale,
+                  (lo[d] + len[d]) / length_scale, axis[d], axis[d]);
+    o += buf;
+  }
+  o += "\nAtoms # sphere\n\n";
+  for (int i = 0; i < n; ++i) {
+    std::snprintf(buf, sizeof buf, "%ld %d %.17g %.17g %.17g %.17g %.17g\n",
+                  ids.empty() ? static_cast<long>(i + 1) : ids[i], h.species[i] + 1,
+                  2 * h.radius[i] / length_scale, h.density[i] * dscale, h.x[i] / length_scale,
+                  h.y[i] / length_scale, h.z[i] / length_scale);
+    o += buf;
+  }
+  o += "\nVelocities\n\n";
+  for (int i = 0; i < n; ++i) {
+    std::snprintf(buf, sizeof buf, "%ld %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                  ids.empty() ? static_cast<long>(i + 1) : ids[i], h.vx[i] * vscale,
+                  h.vy[i] * vscale, h.vz[i] * vscale, h.wx[i] * time_scale, h.wy[i] * time_scale,
+                  h.wz[i] * time_scale);
+    o += buf;
+  }
+  return o;
 }
 
 }  // namespace granular

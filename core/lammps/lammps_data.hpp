@@ -35,4 +35,13 @@ struct LammpsData {
 LammpsData read_lammps_data(const std::string& path, double length_scale = 1e3,
                             double time_scale = 1e6, double mass_scale = 1e9);
 
+// The text of a data file of atom style sphere that read_lammps_data (with the same scales)
+// and LAMMPS' `read_data` read back: species s becomes atom type s + 1, ids are 1..n in
+// particle order (or `ids` where given), and the Velocities section holds the spins.
+// The scales undo the reader's (the default writes SI from the engine's mm, us, ug).
+std::string lammps_data_text(const HostParticles& particles, const double lo[3],
+                             const double len[3], const std::vector<long>& ids = {},
+                             double length_scale = 1e3, double time_scale = 1e6,
+                             double mass_scale = 1e9);
+
 }  // namespace granular

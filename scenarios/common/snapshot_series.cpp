@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "granular_config.hpp"
+
 namespace granular {
 
 std::string snapshot_group(long step) {
@@ -31,6 +33,8 @@ void SnapshotSeries::append(const SnapshotFrame& f) {
   h5_->write(g + "/radius", f.radius);
   h5_->write(g + "/species", f.species);
   h5_->write(g + "/id", f.id);
+  h5_->write(g + "/box_lo", std::vector<double>(f.box_lo, f.box_lo + 3));
+  h5_->write(g + "/box_len", std::vector<double>(f.box_len, f.box_len + 3));
   if (f.nwalls > 0)
     h5_->write(g + "/walls/quads", f.quads, {static_cast<hsize_t>(4 * f.nwalls), 3});
   h5_->attribute(g, "time", f.time);
@@ -39,6 +43,55 @@ void SnapshotSeries::append(const SnapshotFrame& f) {
   times_.push_back(f.time);
   counts_.push_back(f.n);
   walls_.push_back(f.nwalls);
+  append_h5md(f);
+}
+
+void SnapshotSeries::append_h5md(const SnapshotFrame& f) {
+  const std::string p = "/particles/all";
+  if (!h5md_) {
+    h5md_ = std::make_unique<H5Writer>(dir_ + "/" + name_ + ".h5md");
+    H5Writer& h = *h5md_;
+    h.attribute("/h5md", "version", std::vector<int>{1, 1});
+    h.attribute_utf8("/h5md/author", "name", "granular");
+    h.attribute_utf8("/h5md/creator", "name", "granular");
+    h.attribute_utf8("/h5md/creator", "version", GRANULAR_VERSION);
+    h.attribute("/h5md/modules/units", "version", std::vector<int>{1, 0});
+    h.attribute_int(p + "/box", "dimension", 3);
+    std::vector<std::string> boundary;
+    for (int d = 0; d < 3; ++d) boundary.push_back(f.periodic[d] ? "periodic" : "none");
+    h.attribute(p + "/box", "boundary", boundary);
+    // Time-independent: the same particles in every frame, rows in identity order.
+    h.write(p + "/species", f.species);
+    h.write(p + "/id", f.id);
+    h.write(p + "/radius", f.radius);
+    h.attribute_utf8(p + "/radius", "unit", "mm");
+  }
+  H5Writer& h = *h5md_;
+  const hsize_t n = static_cast<hsize_t>(f.n);
+  struct Element {
+    const char* name;
+    const std::vector<double>* value;
+    const char* unit;
+  };
+  // The edges as the box matrix (one edge vector per row; H5MD allows the diagonal alone,
+  // but MDAnalysis reads the matrix).
+  const std::vector<double> edges = {f.box_len[0], 0, 0, 0, f.box_len[1], 0, 0, 0, f.box_len[2]};
+  const Element elements[] = {{"box/edges", &edges, "mm"},
+                              {"position", &f.position, "mm"},
+                              {"velocity", &f.velocity, "mm us-1"},
+                              {"force", &f.force, "N"}};
+  const bool first = steps_.size() == 1;
+  for (const Element& e : elements) {
+    const std::string g = p + "/" + e.name;
+    const bool per_particle = e.value != &edges;
+    h.append(g + "/value", *e.value, std::vector<hsize_t>{per_particle ? n : 3, 3});
+    h.append(g + "/step", std::vector<long>{f.step});
+    h.append(g + "/time", std::vector<double>{f.time});
+    if (first) {
+      h.attribute_utf8(g + "/value", "unit", e.unit);
+      h.attribute_utf8(g + "/time", "unit", "us");
+    }
+  }
 }
 
 void SnapshotSeries::commit() {
@@ -46,6 +99,8 @@ void SnapshotSeries::commit() {
   h5_->attribute("/", "snapshot_every", static_cast<double>(every_));
   h5_->commit();
   h5_.reset();
+  h5md_->commit();
+  h5md_.reset();
   write_text_file(dir_ + "/" + name_ + ".xdmf",
                   snapshot_xdmf(name_ + ".h5", steps_, times_, counts_, walls_));
 }

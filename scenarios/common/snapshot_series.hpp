@@ -1,7 +1,10 @@
 // Snapshots every k steps as one time series ParaView plays: <dir>/<name>.h5 holds a group
 // /step_<step> per frame (position, velocity, angular_velocity, force, radius, species, id,
-// and walls/quads where the scene has walls) and <dir>/<name>.xdmf is a temporal collection
-// of those frames with their simulated times. LAMMPS users know this as `dump every k`.
+// box_lo and box_len, and walls/quads where the scene has walls) and <dir>/<name>.xdmf is a
+// temporal collection of those frames with their simulated times. LAMMPS users know this as
+// `dump every k`. The same frames go to <dir>/<name>.h5md in the H5MD layout (docs/data_formats.md)
+// that MDAnalysis and other H5MD readers open: /particles/all/{position, velocity, force,
+// box/edges} as value/step/time series with units, and species, id and radius.
 //
 // Whole or absent: the HDF5 file is written under a temporary name and renamed by finish(),
 // and the XDMF file is written only after it, so an interrupted run leaves no series that
@@ -23,6 +26,8 @@ struct SnapshotFrame {
   long step = 0;
   double time = 0;
   int n = 0, nwalls = 0;
+  double box_lo[3] = {0, 0, 0}, box_len[3] = {1, 1, 1};
+  bool periodic[3] = {true, true, true};
   std::vector<double> position, velocity, angular_velocity, force, radius, quads;
   std::vector<int> species, id;
 };
@@ -64,6 +69,9 @@ class SnapshotSeries {
     const auto& p = sys.particles();
     SnapshotFrame f;
     f.step = sys.steps(), f.time = sys.time(), f.n = p.n;
+    const PeriodicBox& box = sys.box();
+    for (int d = 0; d < 3; ++d)
+      f.box_lo[d] = box.lo[d], f.box_len[d] = box.len[d], f.periodic[d] = box.periodic[d];
     auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
     auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
     auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.w);
@@ -95,9 +103,10 @@ class SnapshotSeries {
   void commit();
 
  private:
+  void append_h5md(const SnapshotFrame& f);
   std::string dir_, name_;
   long every_ = 0;
-  std::unique_ptr<H5Writer> h5_;
+  std::unique_ptr<H5Writer> h5_, h5md_;
   std::vector<long> steps_;
   std::vector<double> times_;
   std::vector<int> counts_, walls_;

@@ -1,8 +1,8 @@
 // Scene `lammps_forces`: a LAMMPS data file (atom style sphere, orthogonal or triclinic
 // periodic box) under a granular pair style written in LAMMPS' own terms; per-atom forces and
-// torques and the pair virial at step 0 and after velocity-Verlet steps, as HDF5 and as text
-// laid out like a LAMMPS `dump custom` (id x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy
-// tqz, positions unwrapped), so that a deck's output can be compared line by line.
+// torques and the pair virial at step 0 and after velocity-Verlet steps, as HDF5 and as a
+// LAMMPS dump file (`dump custom` with id type xu yu zu vx vy vz omegax omegay omegaz fx fy fz
+// tqx tqy tqz), so that a deck's output can be compared line by line and LAMMPS reads it.
 #include <chrono>
 #include <cmath>
 #include <iomanip>
@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "core/io/output.hpp"
+#include "core/lammps/lammps_dump.hpp"
 #include "core/lammps/lammps_forces.hpp"
 #include "core/run/error.hpp"
 #include "scenarios/common/charts.hpp"
@@ -21,18 +22,23 @@ namespace granular {
 
 namespace {
 
+// A LAMMPS dump frame of the atoms (`dump custom` columns, positions unwrapped).
 std::string dump_text(const LammpsForceField& ff) {
-  std::ostringstream o;
-  o << std::setprecision(17);
-  o << "# step " << ff.steps_done << ", " << ff.size()
-    << " atoms: id x y z vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz\n";
+  LammpsDumpFrame f;
+  f.step = ff.steps_done;
+  const LammpsBox& b = ff.box;
+  for (int d = 0; d < 3; ++d) f.lo[d] = b.lo[d], f.len[d] = b.edge[d][d];
+  f.tilt[0] = b.edge[1][0], f.tilt[1] = b.edge[2][0], f.tilt[2] = b.edge[2][1];
+  f.triclinic = f.tilt[0] != 0 || f.tilt[1] != 0 || f.tilt[2] != 0;
+  f.columns = {"id",     "type",   "xu", "yu", "zu", "vx",  "vy",  "vz", "omegax",
+               "omegay", "omegaz", "fx", "fy", "fz", "tqx", "tqy", "tqz"};
   for (int i = 0; i < ff.size(); ++i) {
-    o << ff.id[i];
+    f.values.push_back(static_cast<double>(ff.id[i]));
+    f.values.push_back(ff.type[i]);
     for (const std::vector<double>* a : {&ff.x, &ff.v, &ff.omega, &ff.force, &ff.torque})
-      for (int k = 0; k < 3; ++k) o << ' ' << (*a)[3 * i + k];
-    o << '\n';
+      for (int k = 0; k < 3; ++k) f.values.push_back((*a)[3 * i + k]);
   }
-  return o.str();
+  return lammps_dump_text(f);
 }
 
 void check_finite(const LammpsForceField& ff) {
@@ -120,7 +126,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
     check_finite(ff);
     write_state(h5, ff, units.nktv2p);
     states.push(state_json(ff, units.nktv2p));
-    write_text_file(opts.out_dir + "/forces_step_" + std::to_string(ff.steps_done) + ".txt",
+    write_text_file(opts.out_dir + "/forces_step_" + std::to_string(ff.steps_done) + ".lammpstrj",
                     dump_text(ff));
     if (opts.progress)
       std::cerr << "lammps_forces: step " << ff.steps_done << " of " << steps << ", " << ff.contacts

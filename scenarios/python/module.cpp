@@ -9,6 +9,8 @@
 #include <Kokkos_Core.hpp>
 #include <cstdlib>
 
+#include "core/lammps/lammps_data.hpp"
+#include "core/lammps/lammps_dump.hpp"
 #include "core/run/error.hpp"
 #include "scenarios/api/simulation.hpp"
 #include "scenarios/common/run_report.hpp"
@@ -122,6 +124,29 @@ WallSpec wall_from(const py::dict& d) {
   return w;
 }
 
+// A LAMMPS dump frame of a simulation's particles, in SI (as `units si` decks and the data
+// files of lammps_data_text) or in the engine's units.
+std::string dump_of(const Simulation& s, bool si) {
+  const HostParticles h = s.particles();
+  const std::vector<double> f = s.forces();
+  const PeriodicBox b = s.box();
+  const double L = si ? 1e-3 : 1, V = si ? 1e3 : 1, W = si ? 1e6 : 1;  // mm, mm/us, 1/us
+  LammpsDumpFrame d;
+  d.step = s.steps();
+  for (int k = 0; k < 3; ++k)
+    d.lo[k] = b.lo[k] * L, d.len[k] = b.len[k] * L, d.periodic[k] = b.periodic[k];
+  d.columns = {"id", "type",   "radius", "x",      "y",  "z",  "vx", "vy",
+               "vz", "omegax", "omegay", "omegaz", "fx", "fy", "fz"};
+  for (int i = 0; i < h.size(); ++i) {
+    const double row[] = {i + 1.0,     h.species[i] + 1.0, h.radius[i] * L, h.x[i] * L,
+                          h.y[i] * L,  h.z[i] * L,         h.vx[i] * V,     h.vy[i] * V,
+                          h.vz[i] * V, h.wx[i] * W,        h.wy[i] * W,     h.wz[i] * W,
+                          f[3 * i],    f[3 * i + 1],       f[3 * i + 2]};
+    d.values.insert(d.values.end(), std::begin(row), std::end(row));
+  }
+  return lammps_dump_text(d);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_granular, m) {
@@ -227,6 +252,10 @@ PYBIND11_MODULE(_granular, m) {
             for (int d = 0; d < 3; ++d) p.box.periodic[d] = v[d];
           });
 
+  m.def(
+      "lammps_data_text",
+      [](const Packing& p) { return lammps_data_text(p.particles, p.box.lo, p.box.len); },
+      py::arg("packing"));
   m.def("random_packing", &api::random_packing, py::arg("count"), py::arg("diameter_min"),
         py::arg("diameter_max"), py::arg("density"), py::arg("phi"), py::arg("seed") = 1,
         py::arg("speed") = 0.0);
@@ -378,6 +407,7 @@ PYBIND11_MODULE(_granular, m) {
           },
           py::arg("amplitude"), py::arg("strain_steps"), py::arg("relax_steps"),
           py::arg("restarting") = true, py::arg("orientations") = 1)
+      .def("lammps_dump_text", &dump_of, py::arg("si") = true)
       .def("save", &Simulation::save)
       .def("restart", &Simulation::restart, py::arg("state"));
 

@@ -101,18 +101,9 @@ def run_lammps(lmp, model, data, units, work):
                 if not w or not w[0].isdigit():
                     break
                 out.append("thermo " + " ".join(w))
-    dump = open(os.path.join(work, "dump.txt")).read().splitlines()
-    k = 0
-    while k < len(dump):
-        if dump[k].startswith("ITEM: TIMESTEP"):
-            step = dump[k + 1].strip()
-            natoms = int(dump[k + 3])
-            start = k + 9
-            for row in dump[start:start + natoms]:
-                out.append(f"atom {step} {row.strip()}")
-            k = start + natoms
-        else:
-            k += 1
+    for step, rows in read_dump(os.path.join(work, "dump.txt")).items():
+        for i, values in rows.items():
+            out.append(f"atom {step} {i} " + " ".join(repr(x) for x in values))
     return out
 
 
@@ -127,6 +118,32 @@ def parse_records(lines):
     return thermo, atoms
 
 
+COLUMNS = ["xu", "yu", "zu", "vx", "vy", "vz", "omegax", "omegay", "omegaz", "fx", "fy", "fz",
+           "tqx", "tqy", "tqz"]
+
+
+def read_dump(path):
+    """A LAMMPS dump file: {step: {id: [the COLUMNS' values]}}, by the ITEM headers."""
+    lines = open(path).read().splitlines()
+    frames, k = {}, 0
+    while k < len(lines):
+        if not lines[k].startswith("ITEM: TIMESTEP"):
+            k += 1
+            continue
+        step = int(lines[k + 1])
+        natoms = int(lines[k + 3])
+        assert lines[k + 4].startswith("ITEM: BOX BOUNDS") and lines[k + 8].startswith("ITEM: ATOMS")
+        names = lines[k + 8].split()[2:]
+        at = [names.index(c) for c in COLUMNS]
+        rows = {}
+        for row in lines[k + 9:k + 9 + natoms]:
+            w = row.split()
+            rows[int(w[names.index("id")])] = [float(w[c]) for c in at]
+        frames[step] = rows
+        k += 9 + natoms
+    return frames
+
+
 def engine_records(out_dir, steps):
     import json
     summary = json.load(open(os.path.join(out_dir, "summary.json")))
@@ -134,13 +151,8 @@ def engine_records(out_dir, steps):
     for s in summary["states"]:
         thermo[s["step"]] = [s["kinetic_energy"]] + s["pair_pressure_tensor"]
     for step in (0, steps):
-        rows = {}
-        for line in open(os.path.join(out_dir, f"forces_step_{step}.txt")):
-            if line.startswith("#"):
-                continue
-            w = line.split()
-            rows[int(w[0])] = [float(x) for x in w[1:]]
-        atoms[step] = rows
+        frames = read_dump(os.path.join(out_dir, f"forces_step_{step}.lammpstrj"))
+        atoms[step] = frames[step]
     return thermo, atoms
 
 

@@ -26,7 +26,8 @@ from ._granular import InputError, Packing, PhysicsError, SavedState  # noqa: F4
 
 __all__ = [
     "InputError", "PhysicsError", "Packing", "SavedState", "System", "initialize", "threads",
-    "random_packing", "read_lammps_data", "read_state", "read_saved_state", "run_scene",
+    "random_packing", "read_lammps_data", "write_lammps_data", "read_state",
+    "read_saved_state", "run_scene",
     "scenes", "toml_text",
 ]
 
@@ -76,6 +77,13 @@ def read_lammps_data(path):
 def read_state(path, group="/final_state"):
     """A particle state group the engine wrote (results.h5's /final_state, a snapshot)."""
     return _granular.read_state_packing(str(path), group)
+
+
+def write_lammps_data(packing, path):
+    """A LAMMPS data file (atom style sphere, SI units, atom type = species + 1, ids 1..n)
+    that LAMMPS' read_data and read_lammps_data read back."""
+    with open(path, "w") as f:
+        f.write(_granular.lammps_data_text(packing))
 
 
 def read_saved_state(path):
@@ -227,6 +235,13 @@ class System:
         """The contact network: arrays i, j (identities, i < j), branch (from i to j, mm),
         normal_force (N, positive repulsive), tangential_force (on i, N), overlap (mm)."""
         return self._sim.contacts()
+
+    def write_lammps_dump(self, path, si=True, append=False):
+        """The particles as a LAMMPS dump frame (ITEM headers; columns id type radius x y z
+        vx vy vz omegax omegay omegaz fx fy fz; SI units unless si=False), which LAMMPS'
+        read_dump, OVITO and MDAnalysis read. append adds a frame to the file."""
+        with open(path, "a" if append else "w") as f:
+            f.write(self._sim.lammps_dump_text(bool(si)))
 
     # --- walls -----------------------------------------------------------------------------
     def set_walls(self, walls):
