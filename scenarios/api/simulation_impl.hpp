@@ -58,17 +58,27 @@ class SimulationOf final : public Simulation {
   }
 
   ContactNetwork contacts() const override {
-    using Host = Kokkos::HostSpace;
-    static_assert(Kokkos::SpaceAccessibility<Host, typename Exec::memory_space>::accessible,
-                  "the contact network is read on the host");
+    // Read on the host (mirrors are the arrays themselves in a host build): what pair_state
+    // needs of the particles, the neighbour list's rows and the contact history.
+    const auto host = Kokkos::HostSpace();
     const auto& p = sys_.particles();
     const auto& nl = sys_.neighbor_list();
-    const ParticleViews<Exec> pv(p);
-    const auto off = nl.offsets();
-    const auto own = nl.owned_end();
-    const auto nb = nl.neighbors();
-    const auto pb = nl.pair_begin();
-    const auto hist = sys_.history_view();
+    const struct {
+      decltype(Kokkos::create_mirror_view_and_copy(host, p.x)) x, v, w;
+      decltype(Kokkos::create_mirror_view_and_copy(host, p.radius)) radius, mass;
+      decltype(Kokkos::create_mirror_view_and_copy(host, p.species)) species;
+    } pv{Kokkos::create_mirror_view_and_copy(host, p.x),
+         Kokkos::create_mirror_view_and_copy(host, p.v),
+         Kokkos::create_mirror_view_and_copy(host, p.w),
+         Kokkos::create_mirror_view_and_copy(host, p.radius),
+         Kokkos::create_mirror_view_and_copy(host, p.mass),
+         Kokkos::create_mirror_view_and_copy(host, p.species)};
+    const auto id = Kokkos::create_mirror_view_and_copy(host, p.id);
+    const auto off = Kokkos::create_mirror_view_and_copy(host, nl.offsets());
+    const auto own = Kokkos::create_mirror_view_and_copy(host, nl.owned_end());
+    const auto nb = Kokkos::create_mirror_view_and_copy(host, nl.neighbors());
+    const auto pb = Kokkos::create_mirror_view_and_copy(host, nl.pair_begin());
+    const auto hist = Kokkos::create_mirror_view_and_copy(host, sys_.history_view());
     const PeriodicBox b = sys_.box();
     const double zero[3] = {0, 0, 0};
     constexpr int H = Model::history;
@@ -89,9 +99,9 @@ class SimulationOf final : public Simulation {
         sys_.model().elastic(s, h, e);
         Row r;
         const double l = s.ai + s.aj - s.delta;  // centre distance; n points from j to i
-        const bool flip = p.id(i) > p.id(j);     // rows are (lower id, higher id)
-        r.a = flip ? p.id(j) : p.id(i);
-        r.b = flip ? p.id(i) : p.id(j);
+        const bool flip = id(i) > id(j);         // rows are (lower id, higher id)
+        r.a = flip ? id(j) : id(i);
+        r.b = flip ? id(i) : id(j);
         for (int d = 0; d < 3; ++d) {
           r.branch[d] = (flip ? l : -l) * s.n[d];  // from a to b
           r.ft[d] = flip ? -e.ft[d] : e.ft[d];     // on a

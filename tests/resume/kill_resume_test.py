@@ -80,8 +80,22 @@ import ensemble_test  # noqa: E402  (the environment Open MPI needs in container
 import verify_references  # noqa: E402  (summary.json numbers without the run record)
 
 # A snapshot series (snapshot_series.hpp) restarts where a resumed run resumed: compared
-# frame by frame, not as one file.
+# frame by frame, not as one file; so is its H5MD twin, whose frames are rows by step.
 SERIES = {"snapshots.h5": "snapshots.xdmf"}
+H5MD_SERIES = {"snapshots.h5md"}
+
+
+def h5md_frames(path):
+    """step_<n> -> digest of the frame's rows (positions, velocities, forces, box, time)."""
+    import h5py
+    frames = {}
+    with h5py.File(path, "r") as f:
+        p = f["particles/all"]
+        for k, step in enumerate(p["position/step"][()]):
+            rows = [(p[e + "/value"][k].tobytes(), p[e + "/time"][k].tobytes())
+                    for e in ("position", "velocity", "force", "box/edges")]
+            frames["step_%d" % step] = digest(rows)
+    return frames
 
 # inotify(7)
 IN_CLOSE_WRITE, IN_MOVED_FROM, IN_MOVED_TO = 0x8, 0x40, 0x80
@@ -291,7 +305,7 @@ class Content:
         self.refs, self.shapes, self.frames = [], {}, None
         name = os.path.basename(rel)
         try:
-            if name.endswith(".h5"):
+            if name.endswith(".h5") or name in H5MD_SERIES:
                 self.read_h5(path)
             elif name == "summary.json":
                 json.loads(Path(path).read_text())  # refused when cut short
@@ -319,6 +333,8 @@ class Content:
                 name = k[5:] if k.startswith("data ") else k[5:].split("@")[0]
                 groups.setdefault(name.strip("/").split("/")[0], []).append((k, v))
             self.frames = {g: digest(sorted(v)) for g, v in groups.items() if g}
+        elif os.path.basename(path) in H5MD_SERIES:
+            self.frames = h5md_frames(path)
 
     def check_text(self, name, text):
         if name.endswith(".xdmf"):
