@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Runs one scene file with keys changed per variant and tabulates chosen summary numbers side
 by side: a parameter study from the command line (the column and pulse lengths of the wave
-scene, docs in the README's wave section).
+scene, docs in docs/guide_waves.md).
 
     scripts/scene_variants.py GRANULAR SCENE.toml --variant NAME:table.key=VALUE[;table.key=VALUE]
                               [--variant ...] --out DIR [--threads N] [--quantities PATTERN,...]

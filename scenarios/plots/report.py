@@ -301,7 +301,7 @@ def main(argv):
             if system:
                 h.append('<p class="muted">Units are read from the key names in the scene\'s '
                          "unit system; a blank unit is one the name does not tell (see the "
-                         "scene file and README).</p>")
+                         "scene file and its page under docs/).</p>")
             h.append(res)
 
     charts = sorted(f for f in os.listdir(out)
