@@ -18,6 +18,7 @@
 #include "core/dem/walls.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/config_state.hpp"
+#include "scenarios/common/contact_network.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/pressure_servo.hpp"
 
@@ -37,14 +38,6 @@ Packing random_packing(int count, double diameter_min, double diameter_max, doub
 Packing read_lammps_packing(const std::string& path);
 // A particle state group written by the engine (results.h5 /final_state, a snapshot).
 Packing read_state_packing(const std::string& path, const std::string& group);
-
-// The contacts of the current state, one row per touching pair (i < j by identity): branch
-// vector from i to j, normal force (positive: repulsive) and tangential force on i.
-struct ContactNetwork {
-  std::vector<int> i, j;
-  std::vector<double> branch, normal_force, tangential_force;  // 3 per contact, fn 1
-  std::vector<double> overlap;
-};
 
 class Simulation {
  public:

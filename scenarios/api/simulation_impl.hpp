@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "scenarios/api/simulation.hpp"
+#include "scenarios/common/contact_network.hpp"
 
 namespace granular::api {
 
@@ -57,71 +58,7 @@ class SimulationOf final : public Simulation {
     return out;
   }
 
-  ContactNetwork contacts() const override {
-    // Read on the host (mirrors are the arrays themselves in a host build): what pair_state
-    // needs of the particles, the neighbour list's rows and the contact history.
-    const auto host = Kokkos::HostSpace();
-    const auto& p = sys_.particles();
-    const auto& nl = sys_.neighbor_list();
-    const struct {
-      decltype(Kokkos::create_mirror_view_and_copy(host, p.x)) x, v, w;
-      decltype(Kokkos::create_mirror_view_and_copy(host, p.radius)) radius, mass;
-      decltype(Kokkos::create_mirror_view_and_copy(host, p.species)) species;
-    } pv{Kokkos::create_mirror_view_and_copy(host, p.x),
-         Kokkos::create_mirror_view_and_copy(host, p.v),
-         Kokkos::create_mirror_view_and_copy(host, p.w),
-         Kokkos::create_mirror_view_and_copy(host, p.radius),
-         Kokkos::create_mirror_view_and_copy(host, p.mass),
-         Kokkos::create_mirror_view_and_copy(host, p.species)};
-    const auto id = Kokkos::create_mirror_view_and_copy(host, p.id);
-    const auto off = Kokkos::create_mirror_view_and_copy(host, nl.offsets());
-    const auto own = Kokkos::create_mirror_view_and_copy(host, nl.owned_end());
-    const auto nb = Kokkos::create_mirror_view_and_copy(host, nl.neighbors());
-    const auto pb = Kokkos::create_mirror_view_and_copy(host, nl.pair_begin());
-    const auto hist = Kokkos::create_mirror_view_and_copy(host, sys_.history_view());
-    const PeriodicBox b = sys_.box();
-    const double zero[3] = {0, 0, 0};
-    constexpr int H = Model::history;
-    struct Row {
-      int a, b;
-      double branch[3], fn, ft[3], delta;
-    };
-    std::vector<Row> rows;
-    for (int i = 0; i < p.n; ++i)
-      for (int k = off(i); k < own(i); ++k) {  // each pair once, from its owner
-        const int j = nb(k);
-        PairState s;
-        if (!pair_state(pv, b, zero, Model::rotations, i, j, s)) continue;
-        double h[H > 0 ? H : 1] = {};
-        if constexpr (H > 0)
-          for (int q = 0; q < H; ++q) h[q] = hist(pb(i) + (k - off(i)), q);
-        PairForce e;
-        sys_.model().elastic(s, h, e);
-        Row r;
-        const double l = s.ai + s.aj - s.delta;  // centre distance; n points from j to i
-        const bool flip = id(i) > id(j);         // rows are (lower id, higher id)
-        r.a = flip ? id(j) : id(i);
-        r.b = flip ? id(i) : id(j);
-        for (int d = 0; d < 3; ++d) {
-          r.branch[d] = (flip ? l : -l) * s.n[d];  // from a to b
-          r.ft[d] = flip ? -e.ft[d] : e.ft[d];     // on a
-        }
-        r.fn = e.fn;
-        r.delta = s.delta;
-        rows.push_back(r);
-      }
-    std::sort(rows.begin(), rows.end(),
-              [](const Row& x, const Row& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
-    ContactNetwork c;
-    for (const Row& r : rows) {
-      c.i.push_back(r.a), c.j.push_back(r.b);
-      c.branch.insert(c.branch.end(), r.branch, r.branch + 3);
-      c.tangential_force.insert(c.tangential_force.end(), r.ft, r.ft + 3);
-      c.normal_force.push_back(r.fn);
-      c.overlap.push_back(r.delta);
-    }
-    return c;
-  }
+  ContactNetwork contacts() const override { return contact_network(sys_); }
 
   void set_walls(const std::vector<WallSpec>& walls) override { sys_.set_walls(walls); }
   std::vector<WallLoad> wall_loads() const override { return sys_.wall_loads(); }

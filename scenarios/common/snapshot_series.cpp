@@ -14,6 +14,10 @@ std::string snapshot_group(long step) {
   return buf;
 }
 
+bool snapshot_contacts(const SceneFile& scene) {
+  return scene.has("output.snapshot_contacts") && scene.flag("output.snapshot_contacts");
+}
+
 SnapshotSeries::SnapshotSeries(std::string dir, std::string name, long every)
     : dir_(std::move(dir)), name_(std::move(name)), every_(every > 0 ? every : 0) {}
 
@@ -33,6 +37,17 @@ void SnapshotSeries::append(const SnapshotFrame& f) {
   h5_->write(g + "/radius", f.radius);
   h5_->write(g + "/species", f.species);
   h5_->write(g + "/id", f.id);
+  if (f.with_contacts) {
+    const ContactNetwork& c = f.contacts;
+    const hsize_t m = static_cast<hsize_t>(c.size());
+    std::vector<int> pairs;
+    for (int k = 0; k < c.size(); ++k) pairs.push_back(c.i[k]), pairs.push_back(c.j[k]);
+    h5_->write(g + "/contacts/pair", pairs, {m, 2});
+    h5_->write(g + "/contacts/branch", c.branch, {m, 3});
+    h5_->write(g + "/contacts/normal_force", c.normal_force, {m});
+    h5_->write(g + "/contacts/tangential_force", c.tangential_force, {m, 3});
+    h5_->write(g + "/contacts/overlap", c.overlap, {m});
+  }
   h5_->write(g + "/box_lo", std::vector<double>(f.box_lo, f.box_lo + 3));
   h5_->write(g + "/box_len", std::vector<double>(f.box_len, f.box_len + 3));
   if (f.nwalls > 0)

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "core/io/output.hpp"
+#include "core/io/scene_file.hpp"
+#include "scenarios/common/contact_network.hpp"
 #include "scenarios/common/wall_config.hpp"
 
 namespace granular {
@@ -30,7 +32,14 @@ struct SnapshotFrame {
   bool periodic[3] = {true, true, true};
   std::vector<double> position, velocity, angular_velocity, force, radius, quads;
   std::vector<int> species, id;
+  bool with_contacts = false;
+  ContactNetwork contacts;  // where the series records the network
 };
+
+// `[output] snapshot_contacts = true`: each frame also holds its contact network (pairs,
+// branch vectors, normal and tangential forces, overlaps). Read only where the file sets it,
+// so the summaries of scenes without it do not change.
+bool snapshot_contacts(const SceneFile& scene);
 
 class SnapshotSeries {
  public:
@@ -41,6 +50,8 @@ class SnapshotSeries {
   ~SnapshotSeries();
 
   bool enabled() const { return every_ > 0; }
+  // Each frame also records the contact network (off by default).
+  void record_contacts(bool on) { contacts_ = on; }
   long every() const { return every_; }
   int frames() const { return static_cast<int>(steps_.size()); }
   // The next step at which a frame is due (for drivers that step in chunks).
@@ -53,14 +64,14 @@ class SnapshotSeries {
   void sample(const System& sys) {
     if (!enabled()) return;
     if (!steps_.empty() && sys.steps() / every_ == steps_.back() / every_) return;
-    append(frame_of(sys));
+    append(frame_with_contacts(sys));
   }
   // Records the final state (unless it is already the last frame), completes the HDF5 file
   // and writes the XDMF file.
   template <class System>
   void finish(const System& sys) {
     if (!enabled()) return;
-    if (steps_.empty() || steps_.back() != sys.steps()) append(frame_of(sys));
+    if (steps_.empty() || steps_.back() != sys.steps()) append(frame_with_contacts(sys));
     commit();
   }
 
@@ -98,6 +109,13 @@ class SnapshotSeries {
     return f;
   }
 
+  template <class System>
+  SnapshotFrame frame_with_contacts(const System& sys) const {
+    SnapshotFrame f = frame_of(sys);
+    if (contacts_) f.with_contacts = true, f.contacts = contact_network(sys);
+    return f;
+  }
+
   // Appends one frame (host data); the templates above call it.
   void append(const SnapshotFrame& f);
   void commit();
@@ -106,6 +124,7 @@ class SnapshotSeries {
   void append_h5md(const SnapshotFrame& f);
   std::string dir_, name_;
   long every_ = 0;
+  bool contacts_ = false;
   std::unique_ptr<H5Writer> h5_, h5md_;
   std::vector<long> steps_;
   std::vector<double> times_;

@@ -119,6 +119,9 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   scene.require(relax_steps >= 0 && relax_steps <= 100000000, "compression.relax_steps",
                 "must lie in [0, 1e8]");
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  const bool with_contacts = snapshot_contacts(scene);
+  scene.require(!with_contacts || snapshot_every > 0, "output.snapshot_contacts",
+                "needs output.snapshot_every > 0 (the frames it adds the network to)");
   scene.reject_unknown_keys();
   check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away
     PeriodicBox first_box;
@@ -194,6 +197,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
 
   // A resumed run's series starts where it resumed; an interrupted one leaves none.
   SnapshotSeries snapshots(opts.out_dir, "snapshots", snapshot_every);
+  snapshots.record_contacts(with_contacts);
   try {
     if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
     snapshots.sample(sys);

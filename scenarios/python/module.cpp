@@ -339,7 +339,7 @@ PYBIND11_MODULE(_granular, m) {
       .def("forces", [](const Simulation& s) { return rows(s.forces(), 3); })
       .def("contacts",
            [](const Simulation& s) {
-             const api::ContactNetwork c = s.contacts();
+             const ContactNetwork c = s.contacts();
              py::dict d;
              d["i"] = py::array_t<int>(c.i.size(), c.i.data());
              d["j"] = py::array_t<int>(c.j.size(), c.j.data());

@@ -520,6 +520,9 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   // first receiver sample at or after every k steps.
   const long snapshot_every = scene.integer("output.snapshot_every", 0);
   scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  const bool with_contacts = snapshot_contacts(scene);
+  scene.require(!with_contacts || snapshot_every > 0, "output.snapshot_contacts",
+                "needs output.snapshot_every > 0 (the frames it adds the network to)");
   scene.reject_unknown_keys();
   check_first_system(scene, opts, [&] {
     PeriodicBox b;
@@ -574,6 +577,7 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
       WaveRecord r;
       SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
                                a == 0 ? snapshot_every : 0);
+      snapshots.record_contacts(with_contacts);
       with_material_model(
           w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
       const Picks pi = pick_travel_times(r.source, w.signals.picker);

@@ -104,7 +104,8 @@ def test_snapshot_series_h5md_holds_the_frames_with_box_and_units(granular, tmp_
     for table, key, value in (("particles", "count", 200), ("compression", "phi_end", 0.62),
                               ("compression", "volumetric_strain_rate", 5e-3),
                               ("compression", "relax_steps", 1000),
-                              ("output", "snapshot_every", 2000)):
+                              ("output", "snapshot_every", 2000),
+                              ("output", "snapshot_contacts", "true")):
         text = set_key(text, table, key, value)
     scene = tmp_path / "scene.toml"
     scene.write_text(text)
@@ -132,6 +133,20 @@ def test_snapshot_series_h5md_holds_the_frames_with_box_and_units(granular, tmp_
         edges = p["box/edges/value"][()]
         assert edges[-1][0][0] < edges[0][0][0]
         assert np.array_equal(p["radius"][()], s[frames[0]]["radius"][()])
+        # The last frame's contact network: as many contacts as the run counted, and the
+        # stress rebuilt from them, -(1/V) sum b (x) f, is the run's final stress.
+        last = s[frames[-1]]
+        c = last["contacts"]
+        b = c["branch"][()]
+        n = -b / np.linalg.norm(b, axis=1)[:, None]
+        f = c["normal_force"][()][:, None] * n + c["tangential_force"][()]
+        sigma = -np.einsum("ca,cb->ab", b, f) / np.prod(last["box_len"][()])
+        with h5py.File(out / "results.h5") as r:
+            series = r["series"]
+            assert len(b) == round(series["z"][-1] * 200 / 2)
+            for a, name in enumerate(("stress_xx", "stress_yy", "stress_zz")):
+                assert sigma[a, a] == pytest.approx(series[name][-1], rel=1e-9)
+        assert np.all(c["pair"][()][:, 0] < c["pair"][()][:, 1])
 
 
 def test_mdanalysis_reads_the_h5md_series_and_the_dump(granular, tmp_path):
