@@ -7,8 +7,11 @@
 #include <string>
 #include <vector>
 
+#include "core/io/output.hpp"
+#include "core/lammps/lammps_data.hpp"
 #include "core/run/error.hpp"
 #include "core/run/rng.hpp"
+#include "scenarios/common/dem_output.hpp"
 
 namespace granular {
 
@@ -106,6 +109,61 @@ void check_gas(const SceneFile& scene, const GasSpec& g, const std::string& phi_
   const double v_max = M_PI / 6 * g.diameter_max * g.diameter_max * g.diameter_max;
   scene.require(std::isfinite(v_max * g.count / g.phi), dmax,
                 "is too large: the box volume overflows");
+}
+
+namespace {
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+}  // namespace
+
+HostParticles read_packing_file(const std::string& path, double density, PeriodicBox& box,
+                                const std::string& group) {
+  HostParticles h;
+  if (ends_with(path, ".h5md")) {
+    const H5Reader in(path);
+    const std::string p = "/particles/all";
+    for (const char* item : {"/position/value", "/radius", "/box/edges/value"})
+      if (!in.has(p + item)) throw InputError(path + ": no " + p + item + " (not an H5MD series)");
+    const auto pos = in.reals(p + "/position/value"), radius = in.reals(p + "/radius");
+    const auto edges = in.reals(p + "/box/edges/value");
+    const size_t n = radius.size();
+    if (n == 0 || pos.size() % (3 * n) != 0 || edges.size() % 9 != 0 ||
+        edges.size() / 9 != pos.size() / (3 * n))
+      throw InputError(path + ": position, radius and box/edges do not agree in size");
+    const size_t last = pos.size() / (3 * n) - 1;  // the last frame
+    h.resize(static_cast<int>(n));
+    for (size_t i = 0; i < n; ++i) {
+      const double* x = &pos[3 * (last * n + i)];
+      h.x[i] = x[0], h.y[i] = x[1], h.z[i] = x[2];
+      h.radius[i] = radius[i];
+      h.density[i] = density;
+    }
+    if (in.has(p + "/species")) {
+      const auto sp = in.ints(p + "/species");
+      for (size_t i = 0; i < n && i < sp.size(); ++i) h.species[i] = sp[i];
+    }
+    const double* e = &edges[9 * last];
+    if (e[1] != 0 || e[2] != 0 || e[3] != 0 || e[5] != 0 || e[6] != 0 || e[7] != 0)
+      throw InputError(path + ": a triclinic box; the engine's periodic box is cuboid");
+    for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.len[d] = e[4 * d];
+    // H5MD stores the edges only: positions are taken in a box at the origin, which the
+    // periodic wrap makes the same packing.
+  } else if (ends_with(path, ".h5")) {
+    const H5Reader in(path);
+    if (!in.has(group)) throw InputError(path + ": no state group " + group);
+    double stored = 0;
+    h = read_state(in, group, box, stored);
+    for (double& r : h.density) r = density;
+  } else {
+    const LammpsData d = read_lammps_data(path);
+    if (d.triclinic())
+      throw InputError(path + ": a triclinic box; the engine's periodic box is cuboid");
+    h = d.particles;
+    for (int k = 0; k < 3; ++k) box.lo[k] = d.lo[k], box.len[k] = d.len[k];
+  }
+  if (h.size() < 2) throw InputError(path + ": fewer than 2 particles");
+  return h;
 }
 
 }  // namespace granular

@@ -32,4 +32,12 @@ HostParticles random_gas(const GasSpec& spec, PeriodicBox& box);
 void check_gas(const SceneFile& scene, const GasSpec& gas, const std::string& phi_key,
                const std::string& table = "particles");
 
+// A starting packing from a file: the last frame of an H5MD file (`.h5md`, as the snapshot
+// series writes them), a particle state group `group` of the engine's HDF5 files (`.h5`, e.g.
+// results.h5's /final_state), or else a LAMMPS data file (atom style sphere, SI units). H5MD
+// frames and states hold no density: `density` is given to every particle; data files carry
+// their own. Throws InputError for an empty packing, a triclinic box or malformed data.
+HostParticles read_packing_file(const std::string& path, double density, PeriodicBox& box,
+                                const std::string& group = "/final_state");
+
 }  // namespace granular

@@ -3,6 +3,7 @@
 // relaxed at constant volume. Records P, Z, E_kin/E_pot against phi; checkpoints so an
 // interrupted run can resume (--resume).
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -79,14 +80,42 @@ struct Series {
 }  // namespace
 
 void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
+  // The start: a random gas, or a packing from a file (particles.from: LAMMPS data, an
+  // H5MD series' last frame or a state group), compressed from its own volume fraction.
+  const std::string from = scene.optional_input_path("particles.from");
   GasSpec gas;
-  gas.count = scene.count("particles.count", 2, kDemBytesPerParticle);
-  gas.diameter_min = scene.real("particles.diameter_min");
-  gas.diameter_max = scene.real("particles.diameter_max");
-  gas.density = scene.real("particles.density");
-  gas.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
-  gas.speed = scene.real("particles.initial_speed", 0.0);
-  gas.phi = scene.real("compression.phi_start");
+  HostParticles start;
+  PeriodicBox start_box;
+  if (from.empty()) {
+    gas.count = scene.count("particles.count", 2, kDemBytesPerParticle);
+    gas.diameter_min = scene.real("particles.diameter_min");
+    gas.diameter_max = scene.real("particles.diameter_max");
+    gas.density = scene.real("particles.density");
+    gas.seed = static_cast<std::uint64_t>(scene.integer("particles.seed", 1));
+    gas.speed = scene.real("particles.initial_speed", 0.0);
+    gas.phi = scene.real("compression.phi_start");
+  } else {
+    // LAMMPS data files carry densities; H5MD frames and engine states do not.
+    const std::string ext = std::filesystem::path(from).extension().string();
+    const double density = ext == ".h5" || ext == ".h5md" ? scene.real("particles.density") : 0.0;
+    try {
+      start = read_packing_file(from, density, start_box,
+                                scene.text("particles.from_group", "/final_state"));
+    } catch (const InputError& e) {
+      scene.require(false, "particles.from", e.what());
+    }
+    gas.count = start.size();
+    gas.density = start.density[0];
+    for (double d : start.density)
+      scene.require(d == gas.density && d > 0, "particles.from",
+                    "holds particles of different or non-positive densities; this scene "
+                    "keeps one density");
+    const auto [rmin, rmax] = std::minmax_element(start.radius.begin(), start.radius.end());
+    gas.diameter_min = 2 * *rmin, gas.diameter_max = 2 * *rmax;
+    double volume = 0;
+    for (double r : start.radius) volume += 4.0 / 3.0 * M_PI * r * r * r;
+    gas.phi = volume / start_box.volume();
+  }
   const double phi_end = scene.real("compression.phi_end");
   const double rate = scene.real("compression.volumetric_strain_rate");
   const long relax_steps = scene.integer("compression.relax_steps", 0);
@@ -108,10 +137,14 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   const long stop_after = scene.integer("run.stop_after", 0);
   // ParaView time series: a frame at the first sample at or after every k steps (0: none).
   const long snapshot_every = scene.integer("output.snapshot_every", 0);
-  scene.require(gas.count >= 2, "particles.count", "must be at least 2");
-  check_gas(scene, gas, "compression.phi_start");
+  if (from.empty()) {
+    scene.require(gas.count >= 2, "particles.count", "must be at least 2");
+    check_gas(scene, gas, "compression.phi_start");
+  }
   scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
-                "must lie between compression.phi_start and 1");
+                from.empty() ? "must lie between compression.phi_start and 1"
+                             : "must lie between the packing's volume fraction (" +
+                                   std::to_string(gas.phi) + ") and 1");
   scene.require(rate > 0, "compression.volumetric_strain_rate", "must be positive");
   scene.require(params.skin > 0, "run.skin", "must be positive");
   scene.require(sample_every > 0, "run.sample_every", "must be positive");
@@ -124,8 +157,9 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
                 "needs output.snapshot_every > 0 (the frames it adds the network to)");
   scene.reject_unknown_keys();
   check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away
-    PeriodicBox first_box;
-    System(Particles<Exec>::from_host(random_gas(gas, first_box)), first_box, model, params);
+    PeriodicBox first_box = start_box;
+    System(Particles<Exec>::from_host(from.empty() ? random_gas(gas, first_box) : start), first_box,
+           model, params);
   });
 
   const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
@@ -146,8 +180,10 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     t0 = in.attribute("/state", "time");
     step0 = static_cast<long>(in.attribute("/state", "step"));
     std::cerr << "resuming from " << checkpoint << " at step " << step0 << "\n";
-  } else {
+  } else if (from.empty()) {
     host = random_gas(gas, box);
+  } else {
+    host = start, box = start_box;
   }
 
   System sys(Particles<Exec>::from_host(host), box, model, params);

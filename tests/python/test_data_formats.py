@@ -178,3 +178,58 @@ def test_mdanalysis_reads_the_h5md_series_and_the_dump(granular, tmp_path):
     x = sim.positions()
     assert len(u.atoms) == sim.size
     assert np.allclose(u.atoms.positions[np.argsort(u.atoms.ids)], x, rtol=1e-6, atol=1e-5)
+
+
+def drop_key(text, table, key):
+    """The scene text without key in [table]."""
+    head = text.index("[%s]" % table)
+    end = text.find("\n[", head + 1)
+    end = len(text) if end < 0 else end
+    body = re.sub(r"^%s\s*=.*\n" % re.escape(key), "", text[head:end], flags=re.M)
+    return text[:head] + body + text[end:]
+
+
+def scene_from(tmp_path, source, density=None, phi_end=0.6):
+    """The quick isotropic compression scene started from a packing file."""
+    text = open(os.path.join(REPO, "scenarios", "packings", "isotropic_compression.toml")).read()
+    for key in ("count", "diameter_min", "diameter_max", "seed", "initial_speed", "density"):
+        text = drop_key(text, "particles", key)
+    text = drop_key(text, "compression", "phi_start")
+    text = set_key(text, "particles", "from", '"%s"' % source)
+    if density is not None:
+        text = set_key(text, "particles", "density", density)
+    for table, key, value in (("compression", "phi_end", phi_end),
+                              ("compression", "volumetric_strain_rate", 5e-3),
+                              ("compression", "relax_steps", 500),
+                              ("output", "snapshot_every", 0)):
+        text = set_key(text, table, key, value)
+    path = tmp_path / "from.toml"
+    path.write_text(text)
+    return path
+
+
+def test_compression_starts_from_a_lammps_data_file_or_an_h5md_frame(granular, tmp_path):
+    # A LAMMPS data file: the run's first state is the file's packing.
+    pack = granular.random_packing(150, 1.0, 3.0, density=2000.0, phi=0.3, seed=4)
+    granular.write_lammps_data(pack, tmp_path / "start.data")
+    granular.run_scene(scene_from(tmp_path, tmp_path / "start.data"), tmp_path / "a")
+    phi0 = np.sum(4 / 3 * np.pi * pack.radius**3) / np.prod(pack.box_len)
+    with h5py.File(tmp_path / "a" / "results.h5") as r:
+        assert r["series/phi"][0] == pytest.approx(phi0, rel=1e-12)
+        assert r["series/phi"][-1] == pytest.approx(0.6, rel=2e-3)
+        assert np.allclose(np.sort(r["final_state/radius"][()]), np.sort(pack.radius),
+                           rtol=1e-15)
+    # The last frame of an H5MD series (a run of the shipped scene, shrunk).
+    test_snapshot_series_h5md_holds_the_frames_with_box_and_units(granular, tmp_path)
+    with h5py.File(tmp_path / "out" / "snapshots.h5md") as f:
+        p = f["particles/all"]
+        edges = p["box/edges/value"][-1]
+        phi_last = np.sum(4 / 3 * np.pi * p["radius"][()]**3) / np.prod(np.diag(edges))
+    granular.run_scene(scene_from(tmp_path, tmp_path / "out" / "snapshots.h5md", 2000.0, 0.65),
+                       tmp_path / "b")
+    with h5py.File(tmp_path / "b" / "results.h5") as r:
+        assert r["series/phi"][0] == pytest.approx(phi_last, rel=1e-12)
+    # A data file and a density together: the file's densities stand, the key is refused.
+    with pytest.raises(granular.InputError, match="particles.density"):
+        granular.run_scene(scene_from(tmp_path, tmp_path / "start.data", 2000.0),
+                           tmp_path / "c", check_only=True)
