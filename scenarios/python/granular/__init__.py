@@ -148,25 +148,9 @@ class System:
         if _sim is not None:
             self._sim = _sim
             return
-        if dt is None or skin is None:
-            raise InputError("System needs dt (us) and skin (mm)")
-        initialize()
-        tables = {}
-        if materials:
-            tables["materials"] = dict(materials)
-        if contact:
-            tables["contact"] = dict(contact)
-        if not tables:
-            raise InputError("System needs contact={...} or materials={...}")
-        self._sim = _granular.make_simulation(
-            packing, toml_text(tables), "<System contact>", float(dt), float(skin),
-            float(damping), float(rotational_damping), int(rattler_threshold),
-            float(max_overlap), tuple(float(g) for g in gravity))
-        self._settings = dict(dt=dt, skin=skin, damping=damping,
-                              rotational_damping=rotational_damping,
-                              rattler_threshold=rattler_threshold, max_overlap=max_overlap,
-                              gravity=gravity)
-        self._contact = toml_text(tables)
+        self._sim = _simulation(_granular.make_simulation, packing, contact, materials, dt, skin,
+                                damping, rotational_damping, rattler_threshold, max_overlap,
+                                gravity)
 
     # --- stepping ------------------------------------------------------------------------
     def step(self, n=1):
@@ -301,26 +285,35 @@ class System:
         return System(None, _sim=self._sim.restart(state))
 
     @classmethod
-    def from_saved(cls, state, contact=None, materials=None, **settings):
-        """A System continuing a saved state (SavedState or a path) under a contact law."""
+    def from_saved(cls, state, contact=None, materials=None, dt=None, skin=None, damping=0.0,
+                   rotational_damping=0.0, rattler_threshold=3, max_overlap=0.3,
+                   gravity=(0.0, 0.0, 0.0)):
+        """A System continuing a saved state (SavedState or a path) under a contact law, with
+        the settings of System()."""
         if not isinstance(state, SavedState):
             state = read_saved_state(state)
-        initialize()
-        tables = {}
-        if materials:
-            tables["materials"] = dict(materials)
-        if contact:
-            tables["contact"] = dict(contact)
-        s = dict(damping=0.0, rotational_damping=0.0, rattler_threshold=3, max_overlap=0.3,
-                 gravity=(0.0, 0.0, 0.0))
-        s.update(settings)
-        if "dt" not in s or "skin" not in s:
-            raise InputError("from_saved needs dt (us) and skin (mm)")
-        sim = _granular.restore_simulation(
-            state, toml_text(tables), "<System contact>", float(s["dt"]), float(s["skin"]),
-            float(s["damping"]), float(s["rotational_damping"]), int(s["rattler_threshold"]),
-            float(s["max_overlap"]), tuple(float(g) for g in s["gravity"]))
-        return cls(None, _sim=sim)
+        return cls(None, _sim=_simulation(_granular.restore_simulation, state, contact,
+                                          materials, dt, skin, damping, rotational_damping,
+                                          rattler_threshold, max_overlap, gravity))
+
+
+def _simulation(factory, start, contact, materials, dt, skin, damping, rotational_damping,
+                rattler_threshold, max_overlap, gravity):
+    """The compiled simulation of a packing or a saved state (factory: make_simulation or
+    restore_simulation) under the contact law of `contact` and `materials`."""
+    if dt is None or skin is None:
+        raise InputError("a System needs dt (us) and skin (mm)")
+    tables = {}
+    if materials:
+        tables["materials"] = dict(materials)
+    if contact:
+        tables["contact"] = dict(contact)
+    if not tables:
+        raise InputError("a System needs contact={...} or materials={...}")
+    initialize()
+    return factory(start, toml_text(tables), "<System contact>", float(dt), float(skin),
+                   float(damping), float(rotational_damping), int(rattler_threshold),
+                   float(max_overlap), tuple(float(g) for g in gravity))
 
 
 def scenes():
