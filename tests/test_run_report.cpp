@@ -94,10 +94,9 @@ TEST_F(RunReport, SummaryRecordsWallTimeAndMachine) {
   const std::regex commit("\"granular_commit\": \"([0-9a-f]{40}(-modified)?|unknown)\"");
   EXPECT_TRUE(std::regex_search(js, commit)) << js;
   EXPECT_EQ(js.substr(js.size() - 2), "}\n");
-  // Adding the record again replaces it instead of adding a second one.
-  record_run_in_summary(out(), run_record(1.0, "complete", ""));
-  const std::string again = read_text(out() + "/summary.json");
-  EXPECT_EQ(again.find("\"run\": {"), again.rfind("\"run\": {"));
+  // One record, written with the summary as its last member.
+  EXPECT_EQ(js.find("\"run\": {"), js.rfind("\"run\": {"));
+  EXPECT_GT(js.find("\"run\": {"), js.rfind("\"max_rel_momentum_change\""));
 }
 
 TEST_F(RunReport, ReportEmbedsEveryChartListsParametersAndLinksTheData) {
@@ -250,4 +249,45 @@ TEST_F(RunReport, ReportThatCannotBeWrittenSaysSoInOneLine) {
   EXPECT_EQ(said.find("Traceback"), std::string::npos) << said;
   EXPECT_NE(said.find("report.html not written"), std::string::npos) << said;
   EXPECT_FALSE(fs::exists(folder + "/report.html"));
+}
+
+// A driver that returns without writing its summary stopped at a checkpoint: the run says so
+// in its report (decided by the run, not by comparing file times), and leaves no summary.
+TEST_F(RunReport, RunStoppedAtItsCheckpointIsReportedStoppedWithoutASummary) {
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3: no report";
+  const std::string text = R"(scene = "isotropic_compression"
+[particles]
+count = 300
+diameter_min = 1.0
+diameter_max = 3.0
+density = 2000.0
+seed = 4
+[contact]
+kn = 1.0e5
+gamma_n = 1000.0
+[compression]
+phi_start = 0.4
+phi_end = 0.62
+volumetric_strain_rate = 2.0e-2
+relax_steps = 500
+[run]
+dt = 0.004
+skin = 0.2
+sample_every = 250
+checkpoint_every = 1000
+stop_after = 1000
+)";
+  const std::string path = dir_ + "/stopped.toml";
+  std::ofstream(path) << text;
+  SceneFile scene = SceneFile::load(path);
+  scene.text("scene");
+  RunOptions opts;
+  opts.out_dir = dir_ + "/out_stopped";
+  opts.progress = false, opts.charts = false;
+  run_scene(entry_named("isotropic_compression"), scene, opts);
+  EXPECT_TRUE(fs::exists(opts.out_dir + "/checkpoint.h5"));
+  EXPECT_FALSE(fs::exists(opts.out_dir + "/summary.json"));
+  const std::string html = read_text(opts.out_dir + "/report.html");
+  EXPECT_NE(html.find("Run stopped before its end."), std::string::npos) << html.substr(0, 2000);
+  EXPECT_NE(html.find("continue it with --resume"), std::string::npos);
 }

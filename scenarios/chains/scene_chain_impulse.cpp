@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "core/chain/chain_exact.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
@@ -326,13 +327,17 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
     xis.push_back(cs.spec.xi), residual_means.push_back(residual / energy0);
     residual_ratios.push_back(residual_ratio);
     const std::string g = "/xi_" + std::to_string(k);
-    h5.write(g + "/time", times);
-    h5.write(g + "/te_mean", profile, {static_cast<hsize_t>(samples + 1), static_cast<hsize_t>(N)});
-    h5.write(g + "/centre_mean", centre);
-    h5.write(g + "/width2_mean", width2);
-    h5.write(g + "/source_energy", source_energy);
-    h5.write(g + "/source_fraction_per_realization", source_ratio);
-    h5.write(g + "/energy_drift", drift);
+    // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, energies in
+    // F_0 Delta_0 (= m_0 Delta_0^2 / t_c^2), centre and width in bead indices; the source
+    // fraction and the drift are ratios.
+    write_quantity(h5, g + "/time", times, "1");
+    write_quantity(h5, g + "/te_mean", profile, "1",
+                   {static_cast<hsize_t>(samples + 1), static_cast<hsize_t>(N)});
+    write_quantity(h5, g + "/centre_mean", centre, "1");
+    write_quantity(h5, g + "/width2_mean", width2, "1");
+    write_quantity(h5, g + "/source_energy", source_energy, "1");
+    write_quantity(h5, g + "/source_fraction_per_realization", source_ratio, "1");
+    write_quantity(h5, g + "/energy_drift", drift, "1");
     h5.attribute(g, "xi", cs.spec.xi);
     h5.attribute(g, "t_front_far_end", t_front);
     h5.attribute(g, "analysis_end_sample", static_cast<double>(s_end));
@@ -396,7 +401,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
       Json::or_null(fit_power_law(xis, residual_ratios).exponent);
   summary["source_residual_exponent_vs_xi"] = against_xi;
   summary["wall_seconds"] = total_clock.seconds();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("chain_impulse.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

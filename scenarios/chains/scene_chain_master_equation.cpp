@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "core/chain/master_equation.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
@@ -269,7 +270,8 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
         for (long i = 0; i < n_held; ++i) rms[i] += diff.col(i).squaredNorm() / (double(B) * B);
       }
       for (auto& x : rms) x = std::sqrt(x);
-      h5.write("/xi_" + std::to_string(k) + "/held_out/rms_error_" + name, rms);
+      // The rms error of normalized band energies: a pure number.
+      write_quantity(h5, "/xi_" + std::to_string(k) + "/held_out/rms_error_" + name, rms, "1");
       Json one = Json::object();
       one["max_abs_error_agitated_band"] = agitated;
       one["max_abs_error_any_band"] = any;
@@ -292,28 +294,31 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
     };
     const std::string g = "/xi_" + std::to_string(k);
     const auto BB = static_cast<hsize_t>(B);
-    h5.write(g + "/times", fit_run.times);
+    // Reduced units (docs/model_chains.md §1), so every unit is "1": times in t_c, the
+    // transfer matrices Q in 1/t_c, band energies normalized by the total, fractions.
+    write_quantity(h5, g + "/times", fit_run.times, "1");
     std::vector<double> series;
     for (const auto& m : fit_run.bands) {
       const auto f = flatten(m);
       series.insert(series.end(), f.begin(), f.end());
     }
-    h5.write(g + "/band_series", series, {BB, BB, static_cast<hsize_t>(samples + 1)});
-    h5.write(g + "/Q_nonlinear", flatten(Q1), {BB, BB});
-    h5.write(g + "/Q_linear", flatten(Q2), {BB, BB});
-    h5.write(g + "/Q_global", flatten(G3.Q), {BB, BB});
-    h5.write(g + "/Q_global_trapped", flatten(G4.Q), {BB, BB});
-    h5.write(g + "/trapped_fraction",
-             std::vector<double>(G4.trapped.data(), G4.trapped.data() + B));
-    h5.write(g + "/held_out/times", held.times);
-    h5.write(g + "/validation/times", check.times);
+    write_quantity(h5, g + "/band_series", series, "1",
+                   {BB, BB, static_cast<hsize_t>(samples + 1)});
+    write_quantity(h5, g + "/Q_nonlinear", flatten(Q1), "1", {BB, BB});
+    write_quantity(h5, g + "/Q_linear", flatten(Q2), "1", {BB, BB});
+    write_quantity(h5, g + "/Q_global", flatten(G3.Q), "1", {BB, BB});
+    write_quantity(h5, g + "/Q_global_trapped", flatten(G4.Q), "1", {BB, BB});
+    write_quantity(h5, g + "/trapped_fraction",
+                   std::vector<double>(G4.trapped.data(), G4.trapped.data() + B), "1");
+    write_quantity(h5, g + "/held_out/times", held.times, "1");
+    write_quantity(h5, g + "/validation/times", check.times, "1");
     const hsize_t T = check.times.size();
-    h5.write(g + "/validation/simulated", flatten(sim), {BB, T});
+    write_quantity(h5, g + "/validation/simulated", flatten(sim), "1", {BB, T});
     // Procedure 1 predictions use the balanced Q (see balance_columns).
-    h5.write(g + "/validation/predicted_nonlinear", flatten(pred1), {BB, T});
-    h5.write(g + "/validation/predicted_linear", flatten(pred2), {BB, T});
-    h5.write(g + "/validation/predicted_global", flatten(pred3), {BB, T});
-    h5.write(g + "/validation/predicted_global_trapped", flatten(pred4), {BB, T});
+    write_quantity(h5, g + "/validation/predicted_nonlinear", flatten(pred1), "1", {BB, T});
+    write_quantity(h5, g + "/validation/predicted_linear", flatten(pred2), "1", {BB, T});
+    write_quantity(h5, g + "/validation/predicted_global", flatten(pred3), "1", {BB, T});
+    write_quantity(h5, g + "/validation/predicted_global_trapped", flatten(pred4), "1", {BB, T});
     h5.attribute(g, "xi", cs.spec.xi);
     h5.attribute(g + "/validation", "band_1", b1);
     h5.attribute(g + "/validation", "band_2", b2);
@@ -411,7 +416,7 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
   cost["per_xi"] = cost_runs;
   summary["cost_for_realistic_use"] = cost;
   summary["wall_seconds"] = total_clock.seconds();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("chain_master_equation.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -14,6 +14,7 @@
 
 #include "core/chain/chain_spectrum.hpp"
 #include "core/chain/master_equation.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
@@ -190,7 +191,9 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
     const std::vector<ToneRun> runs =
         run_tones(cs, tones, amplitudes, B, samples, per_sample, mapped, times, opts.progress);
     const std::string g = "/xi_" + std::to_string(k);
-    h5.write(g + "/times", times);
+    // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, displacement
+    // in Delta_0, energies in F_0 Delta_0, band and spectral energies normalized by the total.
+    write_quantity(h5, g + "/times", times, "1");
     h5.attribute(g, "xi", cs.spec.xi);
     const int bins = static_cast<int>(runs[0].spectrum_one.size() / T);
     for (const ToneRun& run : runs) {
@@ -198,12 +201,13 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
       std::snprintf(name, sizeof name, "%s/tone_%d_u0_%g", g.c_str(), run.tone, run.u0);
       const std::string t = name;
       const auto TT = static_cast<hsize_t>(T);
-      h5.write(t + "/bands_mean", run.bands_mean, {static_cast<hsize_t>(B), TT});
-      h5.write(t + "/bands_one", run.bands_one, {static_cast<hsize_t>(B), TT});
-      h5.write(t + "/spectrum_one", run.spectrum_one, {static_cast<hsize_t>(bins), TT});
-      h5.write(t + "/u_one", run.u_one, {static_cast<hsize_t>(N), TT});
-      h5.write(t + "/te_one", run.te_one, {static_cast<hsize_t>(N), TT});
-      h5.write(t + "/total_mean", run.total_mean);
+      write_quantity(h5, t + "/bands_mean", run.bands_mean, "1", {static_cast<hsize_t>(B), TT});
+      write_quantity(h5, t + "/bands_one", run.bands_one, "1", {static_cast<hsize_t>(B), TT});
+      write_quantity(h5, t + "/spectrum_one", run.spectrum_one, "1",
+                     {static_cast<hsize_t>(bins), TT});
+      write_quantity(h5, t + "/u_one", run.u_one, "1", {static_cast<hsize_t>(N), TT});
+      write_quantity(h5, t + "/te_one", run.te_one, "1", {static_cast<hsize_t>(N), TT});
+      write_quantity(h5, t + "/total_mean", run.total_mean, "1");
       h5.attribute(t, "tone", run.tone);
       h5.attribute(t, "u0", run.u0);
       h5.attribute(t, "band", chain_band_of_bin(run.tone, L, B));
@@ -270,11 +274,12 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
     fit["agitated_band_energy_at_end"] = decay.back();
     xj["fits"] = fit;
     const std::string fg = g + "/fits";
-    h5.write(fg + "/decay", decay);
-    h5.write(fg + "/rise", rise);
-    h5.write(fg + "/decay_nonlinear", std::vector<double>{d1.y, d1.z});
-    h5.write(fg + "/rise_nonlinear", std::vector<double>{r1.y, r1.z});
-    h5.write(fg + "/linear_slopes", std::vector<double>{x1, x2});
+    // Normalized band energies; the fits' y are fractions and their rates z, x per t_c.
+    write_quantity(h5, fg + "/decay", decay, "1");
+    write_quantity(h5, fg + "/rise", rise, "1");
+    write_quantity(h5, fg + "/decay_nonlinear", std::vector<double>{d1.y, d1.z}, "1");
+    write_quantity(h5, fg + "/rise_nonlinear", std::vector<double>{r1.y, r1.z}, "1");
+    write_quantity(h5, fg + "/linear_slopes", std::vector<double>{x1, x2}, "1");
     h5.attribute(fg, "tone", ftone);
     h5.attribute(fg, "agitated_band", fband);
     h5.attribute(fg, "neighbour_band", nband);
@@ -301,7 +306,7 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
       "N = 4r sits at the upper edge of band r - 1 and a band centre (wave.bands) mid-band";
   summary["runs"] = runs_json;
   summary["wall_seconds"] = clock.seconds();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("chain_tones.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

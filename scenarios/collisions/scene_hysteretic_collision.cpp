@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 #include "scenarios/common/charts.hpp"
@@ -57,9 +58,9 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
     c["max_overlap"] = *std::max_element(r.delta.begin(), r.delta.end());
     cases.push(c);
     const std::string g = "/collisions/case_" + std::to_string(k++);
-    h5.write(g + "/time", r.t);
-    h5.write(g + "/overlap", r.delta);
-    h5.write(g + "/normal_force", r.force);
+    write_quantity(h5, g + "/time", r.t, "us");
+    write_quantity(h5, g + "/overlap", r.delta, "mm");
+    write_quantity(h5, g + "/normal_force", r.force, "N");
     h5.attribute(g, "kc_over_k2", ratio);
     std::cout << "kc/k2 = " << ratio << ": " << (separated ? "separated" : "stuck together")
               << ", restitution " << (separated ? r.restitution : 0.0) << "\n";
@@ -68,7 +69,7 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "k2", k2);
   h5.commit();
   summary["cases"] = cases;
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("hysteretic_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "core/dem/restitution.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/finite.hpp"
 #include "scenarios/collisions/impact.hpp"
@@ -149,10 +150,10 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
     });
   }
   summary["speed_sweep"] = speeds;
-  h5.write("/speed_sweep/speed", c.speeds);
-  h5.write("/speed_sweep/restitution_exact_mapping", e_exact);
-  h5.write("/speed_sweep/restitution_common_mapping", e_common);
-  h5.write("/speed_sweep/duration_over_elastic_hertz", tc_ratio);
+  write_quantity(h5, "/speed_sweep/speed", c.speeds, "mm us-1");
+  write_quantity(h5, "/speed_sweep/restitution_exact_mapping", e_exact, "1");
+  write_quantity(h5, "/speed_sweep/restitution_common_mapping", e_common, "1");
+  write_quantity(h5, "/speed_sweep/duration_over_elastic_hertz", tc_ratio, "1");
   auto spread = [](const std::vector<double>& v) {
     return *std::max_element(v.begin(), v.end()) - *std::min_element(v.begin(), v.end());
   };
@@ -217,10 +218,10 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
       cf_rebound.push_back(slides ? std::atan2(vt_cf, e * vn) * 180 / M_PI : NAN);
       cf_et.push_back(slides ? -(r.vc_in + 3.5 * dvt) / r.vc_in : NAN);  // v_c' = v_c + 7/2 dv_t
       const std::string g = "/oblique/case_" + std::to_string(k++);
-      h5.write(g + "/time", r.t);
-      h5.write(g + "/overlap", r.overlap);
-      h5.write(g + "/normal_force", r.force_normal);
-      h5.write(g + "/tangential_force", r.force_tangential);
+      write_quantity(h5, g + "/time", r.t, "us");
+      write_quantity(h5, g + "/overlap", r.overlap, "mm");
+      write_quantity(h5, g + "/normal_force", r.force_normal, "N");
+      write_quantity(h5, g + "/tangential_force", r.force_tangential, "N");
       h5.attribute(g, "angle_deg", a);
       std::cout << "angle " << a << " deg: e_n " << e << ", e_t " << r.restitution_tangential
                 << ", rebound " << r.rebound_angle * 180 / M_PI << " deg, spin out " << r.spin_out
@@ -228,21 +229,22 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
     }
   });
   summary["oblique"] = cases;
-  h5.write("/angles/angle_deg", angle);
-  h5.write("/angles/restitution_normal", en);
-  h5.write("/angles/restitution_tangential", et);
-  h5.write("/angles/spin_out_scaled", wout);
-  h5.write("/angles/rebound_angle_deg", rebound);
-  h5.write("/angles/impulse_ratio", jt_over_jn);
-  h5.write("/angles/gross_sliding", sliding);
-  h5.write("/angles/closed_form_spin_out_scaled", cf_wout);
-  h5.write("/angles/closed_form_rebound_angle_deg", cf_rebound);
-  h5.write("/angles/closed_form_restitution_tangential", cf_et);
+  write_quantity(h5, "/angles/angle_deg", angle, "deg");
+  write_quantity(h5, "/angles/restitution_normal", en, "1");
+  write_quantity(h5, "/angles/restitution_tangential", et, "1");
+  // Spins scaled by the sphere's radius over the oblique speed (omega R / v): pure numbers.
+  write_quantity(h5, "/angles/spin_out_scaled", wout, "1");
+  write_quantity(h5, "/angles/rebound_angle_deg", rebound, "deg");
+  write_quantity(h5, "/angles/impulse_ratio", jt_over_jn, "1");
+  write_quantity(h5, "/angles/gross_sliding", sliding, "1");
+  write_quantity(h5, "/angles/closed_form_spin_out_scaled", cf_wout, "1");
+  write_quantity(h5, "/angles/closed_form_rebound_angle_deg", cf_rebound, "deg");
+  write_quantity(h5, "/angles/closed_form_restitution_tangential", cf_et, "1");
   h5.attribute("/", "restitution_input", e_in);
   h5.attribute("/", "friction", mu);
   h5.attribute("/", "target", c.wall ? "wall" : "sphere");
   h5.commit();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("impact.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

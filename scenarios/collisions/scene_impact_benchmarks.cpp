@@ -7,8 +7,10 @@
 #include <Kokkos_Core.hpp>
 #include <cmath>
 #include <iostream>
+#include <tuple>
 
 #include "core/dem/restitution.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/finite.hpp"
 #include "scenarios/collisions/impact.hpp"
@@ -233,41 +235,43 @@ void run_impact_benchmarks(const SceneFile& scene, const RunOptions& opts) {
       }
       if (s.record) {
         const std::string g0 = "/cases/" + c.name + "/first";
-        h5.write(g0 + "/time", r.t);
-        h5.write(g0 + "/overlap", r.overlap);
-        h5.write(g0 + "/normal_force", r.force_normal);
-        h5.write(g0 + "/tangential_force", r.force_tangential);
-        h5.write(g0 + "/slip", r.slip);
+        write_quantity(h5, g0 + "/time", r.t, "us");
+        write_quantity(h5, g0 + "/overlap", r.overlap, "mm");
+        write_quantity(h5, g0 + "/normal_force", r.force_normal, "N");
+        write_quantity(h5, g0 + "/tangential_force", r.force_tangential, "N");
+        write_quantity(h5, g0 + "/slip", r.slip, "mm us-1");
         h5.attribute(g0, "hertz_stiffness", 4.0 / 3.0 * estar * std::sqrt(rstar));
       }
     }
     const std::string g = "/cases/" + c.name;
-    const std::pair<const char*, const std::vector<double>*> columns[] = {
-        {"value", &o.value},
-        {"restitution_input", &o.e_input},
-        {"normal_speed", &o.vn},
-        {"slip_in", &o.vc},
-        {"spin_in", &o.spin_in},
-        {"friction", &o.mu},
-        {"restitution_normal", &o.en},
-        {"restitution_tangential", &o.et},
-        {"restitution_tangential_centre", &o.et_centre},
-        {"spin_out", &o.spin_out},
-        {"rebound_angle_deg", &o.rebound_deg},
-        {"impulse_ratio", &o.impulse_ratio},
-        {"duration", &o.duration},
-        {"max_overlap", &o.overlap},
-        {"max_normal_force", &o.force},
-        {"normalised_incidence", &o.incidence},
-        {"hertz_duration", &o.cf_duration},
-        {"hertz_overlap", &o.cf_overlap},
-        {"hertz_force", &o.cf_force},
-        {"gross_sliding", &o.cf_slides},
-        {"closed_form_restitution_tangential", &o.cf_et},
-        {"closed_form_spin_out", &o.cf_spin},
-        {"closed_form_rebound_angle_deg", &o.cf_rebound},
-        {"closed_form_impulse_ratio", &o.cf_impulse}};
-    for (const auto& [name, col] : columns) h5.write(g + "/" + name, *col);
+    // The unit of `value`, the swept quantity (as read from the scene file).
+    static const char* sweep_units[] = {"mm us-1", "1", "deg", "mm us-1", "rad us-1"};
+    const std::tuple<const char*, const std::vector<double>*, const char*> columns[] = {
+        {"value", &o.value, sweep_units[static_cast<int>(c.sweep)]},
+        {"restitution_input", &o.e_input, "1"},
+        {"normal_speed", &o.vn, "mm us-1"},
+        {"slip_in", &o.vc, "mm us-1"},
+        {"spin_in", &o.spin_in, "rad us-1"},
+        {"friction", &o.mu, "1"},
+        {"restitution_normal", &o.en, "1"},
+        {"restitution_tangential", &o.et, "1"},
+        {"restitution_tangential_centre", &o.et_centre, "1"},
+        {"spin_out", &o.spin_out, "rad us-1"},
+        {"rebound_angle_deg", &o.rebound_deg, "deg"},
+        {"impulse_ratio", &o.impulse_ratio, "1"},
+        {"duration", &o.duration, "us"},
+        {"max_overlap", &o.overlap, "mm"},
+        {"max_normal_force", &o.force, "N"},
+        {"normalised_incidence", &o.incidence, "1"},
+        {"hertz_duration", &o.cf_duration, "us"},
+        {"hertz_overlap", &o.cf_overlap, "mm"},
+        {"hertz_force", &o.cf_force, "N"},
+        {"gross_sliding", &o.cf_slides, "1"},
+        {"closed_form_restitution_tangential", &o.cf_et, "1"},
+        {"closed_form_spin_out", &o.cf_spin, "rad us-1"},
+        {"closed_form_rebound_angle_deg", &o.cf_rebound, "deg"},
+        {"closed_form_impulse_ratio", &o.cf_impulse, "1"}};
+    for (const auto& [name, col, unit] : columns) write_quantity(h5, g + "/" + name, *col, unit);
     static const char* sweep_names[] = {"speed", "restitution", "angle", "tangential_speed",
                                         "spin"};
     h5.attribute(g, "test", static_cast<double>(c.test));
@@ -297,7 +301,7 @@ void run_impact_benchmarks(const SceneFile& scene, const RunOptions& opts) {
     std::cout << "\n";
   }
   summary["cases"] = cases;
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   h5.commit();
   if (opts.charts)
     run_plot_script("impact_benchmarks.py", opts.out_dir + "/results.h5", opts.out_dir);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
 #include "scenarios/common/charts.hpp"
@@ -75,9 +76,9 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
       tc_meas.push_back(r.duration), tc_closed.push_back(tc);
       e_meas.push_back(r.restitution), e_closed.push_back(e);
       const std::string g = "/collisions/case_" + std::to_string(k++);
-      h5.write(g + "/time", r.t);
-      h5.write(g + "/overlap", r.delta);
-      h5.write(g + "/normal_force", r.force);
+      write_quantity(h5, g + "/time", r.t, "us");
+      write_quantity(h5, g + "/overlap", r.delta, "mm");
+      write_quantity(h5, g + "/normal_force", r.force, "N");
       h5.attribute(g, "mass_ratio", m2 / m1);
       h5.attribute(g, "impact_speed", v);
       h5.attribute(g, "contact_duration_closed_form", tc);
@@ -86,18 +87,18 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
                 << ")\n";
     }
   }
-  h5.write("/table/mass_ratio", mass_ratio);
-  h5.write("/table/impact_speed", speed);
-  h5.write("/table/contact_duration", tc_meas);
-  h5.write("/table/contact_duration_closed_form", tc_closed);
-  h5.write("/table/restitution", e_meas);
-  h5.write("/table/restitution_closed_form", e_closed);
+  write_quantity(h5, "/table/mass_ratio", mass_ratio, "1");
+  write_quantity(h5, "/table/impact_speed", speed, "mm us-1");
+  write_quantity(h5, "/table/contact_duration", tc_meas, "us");
+  write_quantity(h5, "/table/contact_duration_closed_form", tc_closed, "us");
+  write_quantity(h5, "/table/restitution", e_meas, "1");
+  write_quantity(h5, "/table/restitution_closed_form", e_closed, "1");
   h5.commit();
   summary["cases"] = cases;
   summary["max_rel_error_contact_duration"] = worst_tc;
   summary["max_rel_error_restitution"] = worst_e;
   summary["max_rel_momentum_change"] = worst_p;
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("two_particle_linear.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "core/io/dataset_units.hpp"
 #include "kernels/contact/contact_state.hpp"
 
 namespace granular {
@@ -33,23 +34,26 @@ void write_config(const std::string& path, const ConfigState& c) {
   const HostParticles& p = c.particles;
   const hsize_t n = static_cast<hsize_t>(c.size());
   H5Writer out(path);
-  out.write("/state/position", interleave(p.x, p.y, p.z), {n, 3});
-  out.write("/state/velocity", interleave(p.vx, p.vy, p.vz), {n, 3});
-  out.write("/state/angular_velocity", c.w, {n, 3});
-  out.write("/state/radius", p.radius);
-  out.write("/state/mass", c.mass);
-  out.write("/state/density", p.density);
-  out.write("/state/species", p.species);
-  out.write("/state/box_lo", std::vector<double>(c.box.lo, c.box.lo + 3));
-  out.write("/state/box_len", std::vector<double>(c.box.len, c.box.len + 3));
+  // The engine's units: mm, us, ug.
+  write_quantity(out, "/state/position", interleave(p.x, p.y, p.z), "mm", {n, 3});
+  write_quantity(out, "/state/velocity", interleave(p.vx, p.vy, p.vz), "mm us-1", {n, 3});
+  write_quantity(out, "/state/angular_velocity", c.w, "rad us-1", {n, 3});
+  write_quantity(out, "/state/radius", p.radius, "mm");
+  write_quantity(out, "/state/mass", c.mass, "ug");
+  write_quantity(out, "/state/density", p.density, "ug mm-3");
+  write_quantity(out, "/state/species", p.species, "1");
+  write_quantity(out, "/state/box_lo", std::vector<double>(c.box.lo, c.box.lo + 3), "mm");
+  write_quantity(out, "/state/box_len", std::vector<double>(c.box.len, c.box.len + 3), "mm");
   out.attribute("/state", "phi", c.phi);
   out.attribute("/state", "pressure", c.pressure);
   out.attribute("/state", "format", std::string("granular configuration 1"));
   out.attribute("/contacts", "history_width", static_cast<double>(c.history_width));
   if (!c.pair_i.empty()) {
     const hsize_t m = c.pair_i.size(), w = static_cast<hsize_t>(c.history_width);
-    out.write("/contacts/pair_i", c.pair_i);
-    out.write("/contacts/pair_j", c.pair_j);
+    write_quantity(out, "/contacts/pair_i", c.pair_i, "1");
+    write_quantity(out, "/contacts/pair_j", c.pair_j, "1");
+    // No unit: each contact law keeps its own mix of values in a history row (spring
+    // displacements, largest overlaps, ...), which this file does not name.
     out.write("/contacts/history", c.history, {m, w});
   }
   out.commit();

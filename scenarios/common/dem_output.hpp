@@ -9,6 +9,7 @@
 
 #include "core/dem/box.hpp"
 #include "core/dem/particles.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
 
@@ -37,14 +38,15 @@ void write_state(H5Writer& out, const std::string& group, const Particles<ExecSp
     species[row] = sp(i);
   }
   const hsize_t nn = static_cast<hsize_t>(n);
-  out.write(group + "/position", pos, {nn, 3});
-  out.write(group + "/velocity", vel, {nn, 3});
-  out.write(group + "/angular_velocity", spin, {nn, 3});
-  out.write(group + "/radius", rad);
-  out.write(group + "/species", species);
-  out.write(group + "/id", ids);
-  out.write(group + "/box_lo", std::vector<double>(box.lo, box.lo + 3));
-  out.write(group + "/box_len", std::vector<double>(box.len, box.len + 3));
+  // The engine's units: mm, us, ug.
+  write_quantity(out, group + "/position", pos, "mm", {nn, 3});
+  write_quantity(out, group + "/velocity", vel, "mm us-1", {nn, 3});
+  write_quantity(out, group + "/angular_velocity", spin, "rad us-1", {nn, 3});
+  write_quantity(out, group + "/radius", rad, "mm");
+  write_quantity(out, group + "/species", species, "1");
+  write_quantity(out, group + "/id", ids, "1");
+  write_quantity(out, group + "/box_lo", std::vector<double>(box.lo, box.lo + 3), "mm");
+  write_quantity(out, group + "/box_len", std::vector<double>(box.len, box.len + 3), "mm");
   out.attribute(group, "density", density);
 }
 

@@ -52,6 +52,7 @@ std::string cpu_model() {
 // the CLI runs one scene).
 struct ActiveRun {
   bool on = false;
+  bool summary_written = false;  // the driver wrote its summary.json (its results are whole)
   std::string dir, scene, scene_file;
   std::chrono::steady_clock::time_point start, last_report;
 };
@@ -64,7 +65,7 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-// What identifies one version of summary.json, to tell whether the run rewrote it.
+// What identifies one version of the output folder, to tell whether the run wrote anything.
 struct FileStamp {
   bool exists = false;
   fs::file_time_type time{};
@@ -142,30 +143,19 @@ Json run_record(double wall_seconds, const std::string& status, const std::strin
   return r;
 }
 
-void record_run_in_summary(const std::string& dir, const Json& run) {
-  const std::string path = dir + "/summary.json";
-  std::ifstream f(path);
-  if (!f) return;
-  std::stringstream ss;
-  ss << f.rdbuf();
-  std::string text = ss.str();
-  // Drivers write summary.json with Json::dump: one object, two-space indent, members one
-  // per line. JSON is not parsed back here (the builder has no reader); the member is added
-  // before the closing brace, and an earlier "run" member (always the last) is cut first.
-  const auto earlier = text.find("\n  \"run\": ");
-  if (earlier != std::string::npos) text.erase(earlier), text += "\n}";
-  const auto close = text.find_last_of('}');
-  if (close == std::string::npos) return;
-  text.erase(close);
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
-  if (text.empty()) return;
-  if (text.back() == ',') text.pop_back();
-  std::string member = run.dump(2);
-  while (!member.empty() && member.back() == '\n') member.pop_back();
-  std::string indented;
-  for (char c : member) indented += c == '\n' ? std::string("\n  ") : std::string(1, c);
-  text += std::string(text.back() == '{' ? "" : ",") + "\n  \"run\": " + indented + "\n}\n";
-  write_text_file(path, text);
+void write_scene_summary(const RunOptions& opts, Json summary,
+                         const std::vector<std::string>& tables) {
+  ActiveRun& run = active_run();
+  const bool recorded = run.on && run.dir == opts.out_dir;
+  if (recorded) {
+    Json rec = run_record(seconds_since(run.start), "complete", "");
+    rec["scene"] = run.scene;
+    rec["scene_file"] = run.scene_file;
+    rec["summary_from_this_run"] = true;
+    summary["run"] = rec;
+  }
+  write_summary(opts.out_dir + "/summary.json", summary, tables);
+  if (recorded) run.summary_written = true;
 }
 
 bool write_report(const std::string& dir, const Json& run) {
@@ -178,14 +168,13 @@ bool write_report(const std::string& dir, const Json& run) {
 }
 
 void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts) {
-  const std::string summary = opts.out_dir + "/summary.json";
-  const FileStamp before = stamp(summary);
   // Every output file is renamed into place, which changes the folder's time: a run that
   // leaves it unchanged wrote nothing (refused input, a check of the scene file) and gets
   // no report, so an earlier run's report stays as it was.
   const FileStamp folder_before = stamp(opts.out_dir);
   ActiveRun& run = active_run();
   run.on = true;
+  run.summary_written = false;
   run.dir = opts.out_dir;
   run.scene = entry.name;
   run.scene_file = scene.path();
@@ -197,13 +186,7 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
     Json rec = run_record(seconds_since(run.start), status, message);
     rec["scene"] = run.scene;
     rec["scene_file"] = run.scene_file;
-    const bool fresh = !(stamp(summary) == before) && stamp(summary).exists;
-    rec["summary_from_this_run"] = fresh;
-    try {
-      if (fresh) record_run_in_summary(opts.out_dir, rec);
-    } catch (const std::exception& e) {
-      std::cerr << "warning: run record not added to " << summary << ": " << e.what() << "\n";
-    }
+    rec["summary_from_this_run"] = run.summary_written;
     write_report(opts.out_dir, rec);
   };
   try {
@@ -215,7 +198,8 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
     finish("failed", e.what());
     throw;
   }
-  if (!stamp(summary).exists || stamp(summary) == before)
+  // A driver that returns without writing its summary stopped at a checkpoint.
+  if (!run.summary_written)
     finish("stopped",
            "the run stopped before its end (a checkpoint is kept): continue it with --resume");
   else

@@ -4,6 +4,7 @@
 // no network. A missing python3 or a failing report script never fails the run.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/io/output.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -12,7 +13,7 @@ namespace granular {
 
 // The opening of every summary.json: {"scene": name, "scene_file": the path as given,
 // "parameters": every key of the scene file that the driver used, with its text}. The driver
-// adds its results after it; the run record ("run") is added by run_scene.
+// adds its results after it and writes it with write_scene_summary.
 Json scene_summary(const SceneFile& scene, const std::string& name);
 
 // "OpenMP Serial", the Kokkos backends this build has.
@@ -22,8 +23,12 @@ std::string kokkos_backends();
 // started `wall_seconds` ago; `status` is "complete", "stopped", "failed" or "running".
 Json run_record(double wall_seconds, const std::string& status, const std::string& message);
 
-// Adds (or replaces) the member "run" of <dir>/summary.json; the file is rewritten whole.
-void record_run_in_summary(const std::string& dir, const Json& run);
+// Writes <opts.out_dir>/summary.json (write_summary: nothing non-finite outside `tables`), the
+// last output of a driver whose results are whole. Inside run_scene the run record (wall
+// time so far, machine, build) is its member "run", and the run counts as complete; a
+// driver that returns without calling it stopped at a checkpoint.
+void write_scene_summary(const RunOptions& opts, Json summary,
+                         const std::vector<std::string>& tables = {});
 
 // Writes <dir>/report.html from what the folder holds now; false (with a note) when the
 // report could not be written.

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/io/dataset_units.hpp"
+
 namespace granular {
 
 namespace {
@@ -83,11 +85,11 @@ void WallSeries::write(H5Writer& out, const std::string& group) const {
   const hsize_t nt = time.size();
   for (size_t w = 0; w < names.size(); ++w) {
     const std::string g = group + "/" + names[w];
-    out.write(g + "/time", time);
-    out.write(g + "/position", position[w], {nt, 3});
-    out.write(g + "/force", force[w], {nt, 3});
-    out.write(g + "/torque", torque[w], {nt, 3});
-    out.write(g + "/contacts", contacts[w]);
+    write_quantity(out, g + "/time", time, "us");
+    write_quantity(out, g + "/position", position[w], "mm", {nt, 3});
+    write_quantity(out, g + "/force", force[w], "N", {nt, 3});
+    write_quantity(out, g + "/torque", torque[w], "N mm", {nt, 3});  // about the wall's point
+    write_quantity(out, g + "/contacts", contacts[w], "1");
   }
 }
 

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "core/continuum/deformation_paths.hpp"
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/common/charts.hpp"
 #include "scenarios/common/packing.hpp"
@@ -187,7 +188,11 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       const PathRecord r = drive_to_volume_fraction(
           p, step_increment(PathKind::isotropic, s.example_step), s.example_nu_end);
       const std::string g = std::string("/example/") + to_string(u);
-      h5.write(g + "/nu", r.nu), h5.write(g + "/pressure", r.pressure), h5.write(g + "/K", r.K);
+      // The source prints K0, K1, G0, G1 without a unit (docs/model_continuum.md §6): the
+      // example's pressure and K are numbers in that unprinted stress unit, labelled "1".
+      write_quantity(h5, g + "/nu", r.nu, "1");
+      write_quantity(h5, g + "/pressure", r.pressure, "1");
+      write_quantity(h5, g + "/K", r.K, "1");
       Json& e = ex[to_string(u)];
       e = Json::object();
       e["steps"] = static_cast<long>(r.size() - 1);
@@ -297,18 +302,32 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       jf.push(j);
 
       const std::string g = "/fit/" + key;
-      h5.write(g + "/data/phi", d.phi), h5.write(g + "/data/z", d.z);
+      // Volume fractions, coordination numbers and fabric traces are pure numbers; moduli and
+      // pressures in MPa (K = K* kn_mean / dbar; the preparation's pressure as the study
+      // wrote it).
+      write_quantity(h5, g + "/data/phi", d.phi, "1");
+      write_quantity(h5, g + "/data/z", d.z, "1");
       h5.attribute(g, "data_set", d.name);
       h5.attribute(g, "study", set.study);
-      h5.write(g + "/data/fabric", d.fabric), h5.write(g + "/data/K", d.K);
-      h5.write(g + "/data/G", d.G), h5.write(g + "/data/pressure", d.pressure);
-      h5.write(g + "/preparation/phi", d.prep_phi);
-      h5.write(g + "/preparation/pressure", d.prep_pressure);
-      h5.write(g + "/preparation/z", d.prep_z);
-      h5.write(g + "/preparation/peak", std::vector<int>{static_cast<int>(d.peak)});
+      write_quantity(h5, g + "/data/fabric", d.fabric, "1");
+      write_quantity(h5, g + "/data/K", d.K, "MPa");
+      write_quantity(h5, g + "/data/G", d.G, "MPa");
+      write_quantity(h5, g + "/data/pressure", d.pressure, "MPa");
+      write_quantity(h5, g + "/preparation/phi", d.prep_phi, "1");
+      write_quantity(h5, g + "/preparation/pressure", d.prep_pressure, "MPa");
+      write_quantity(h5, g + "/preparation/z", d.prep_z, "1");
+      write_quantity(h5, g + "/preparation/peak", std::vector<int>{static_cast<int>(d.peak)}, "1");
       std::vector<double> cv;
       for (const FittedConstant& c : f.constants) cv.push_back(c.value);
       h5.write(g + "/constants", cv);
+      // The constants differ in unit (nu0, C0, C1, alpha, g3, Fv0, G2 pure numbers; K0, K1,
+      // G0, G1 in MPa): no single unit, so each entry's name and unit go beside it.
+      std::vector<std::string> cnames, cunits;
+      for (const FittedConstant& c : f.constants)
+        cnames.push_back(c.name), cunits.push_back(c.unit[0] == '-' ? "1" : c.unit);
+      set_unit(h5, g + "/constants", "mixed");
+      h5.attribute(g + "/constants", "entry_names", cnames);
+      h5.attribute(g + "/constants", "entry_units", cunits);
       // The law's curves over the data's range, for the charts.
       std::vector<double> nu, C, Fv, K, G;
       for (int i = 0; i <= 400; ++i) {
@@ -316,15 +335,19 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
         const ContinuumModuli m = continuum_moduli(f.law, x);
         nu.push_back(x), C.push_back(m.C), Fv.push_back(m.Fv), K.push_back(m.K), G.push_back(m.G);
       }
-      h5.write(g + "/law/nu", nu), h5.write(g + "/law/C", C), h5.write(g + "/law/Fv", Fv);
-      h5.write(g + "/law/K", K), h5.write(g + "/law/G", G);
-      h5.write(g + "/isotropic/law_phi", v.law_phi), h5.write(g + "/isotropic/law_p", v.law_p);
-      h5.write(g + "/isotropic/loading_phi", v.loading.phi);
-      h5.write(g + "/isotropic/loading_p_dem", v.loading.p_dem);
-      h5.write(g + "/isotropic/loading_p_law", v.loading.p_law);
-      h5.write(g + "/isotropic/unloading_phi", v.unloading.phi);
-      h5.write(g + "/isotropic/unloading_p_dem", v.unloading.p_dem);
-      h5.write(g + "/isotropic/unloading_p_law", v.unloading.p_law);
+      write_quantity(h5, g + "/law/nu", nu, "1");
+      write_quantity(h5, g + "/law/C", C, "1");
+      write_quantity(h5, g + "/law/Fv", Fv, "1");
+      write_quantity(h5, g + "/law/K", K, "MPa");
+      write_quantity(h5, g + "/law/G", G, "MPa");
+      write_quantity(h5, g + "/isotropic/law_phi", v.law_phi, "1");
+      write_quantity(h5, g + "/isotropic/law_p", v.law_p, "MPa");
+      write_quantity(h5, g + "/isotropic/loading_phi", v.loading.phi, "1");
+      write_quantity(h5, g + "/isotropic/loading_p_dem", v.loading.p_dem, "MPa");
+      write_quantity(h5, g + "/isotropic/loading_p_law", v.loading.p_law, "MPa");
+      write_quantity(h5, g + "/isotropic/unloading_phi", v.unloading.phi, "1");
+      write_quantity(h5, g + "/isotropic/unloading_p_dem", v.unloading.p_dem, "MPa");
+      write_quantity(h5, g + "/isotropic/unloading_p_law", v.unloading.p_law, "MPa");
     }
   }
   write_text_file(opts.out_dir + "/constants.txt", constants_txt.str());
@@ -345,9 +368,13 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
       for (int q = 1; q <= s.history_substeps; ++q)
         time.push_back(table.time[row - 1] +
                        (table.time[row] - table.time[row - 1]) * q / s.history_substeps);
-    h5.write("/history/time", time), h5.write("/history/nu", r.nu);
-    h5.write("/history/pressure", r.pressure), h5.write("/history/deviatoric", r.deviatoric);
-    h5.write("/history/tau", r.tau, {r.size(), 9});
+    // The table's time column as given, taken as the engine's time unit (the law is
+    // rate-independent: time only places the rows); stresses of the fitted law in MPa.
+    write_quantity(h5, "/history/time", time, "us");
+    write_quantity(h5, "/history/nu", r.nu, "1");
+    write_quantity(h5, "/history/pressure", r.pressure, "MPa");
+    write_quantity(h5, "/history/deviatoric", r.deviatoric, "MPa");
+    write_quantity(h5, "/history/tau", r.tau, "MPa", {r.size(), 9});
     h5.attribute("/history", "fit", it->first);
     Json& jh = summary["history"];
     jh = Json::object();
@@ -406,9 +433,13 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
         fail_strain = strain.back();
     }
     const double n = static_cast<double>(strain.size());
-    h5.write("/shear/strain", strain), h5.write("/shear/p_dem", p_dem);
-    h5.write("/shear/p_law", p_law), h5.write("/shear/dev_dem", d_dem);
-    h5.write("/shear/dev_law", d_law), h5.write("/shear/z_dem", dem.z);
+    // Axial true strain and coordination numbers are pure numbers; stresses in MPa.
+    write_quantity(h5, "/shear/strain", strain, "1");
+    write_quantity(h5, "/shear/p_dem", p_dem, "MPa");
+    write_quantity(h5, "/shear/p_law", p_law, "MPa");
+    write_quantity(h5, "/shear/dev_dem", d_dem, "MPa");
+    write_quantity(h5, "/shear/dev_law", d_law, "MPa");
+    write_quantity(h5, "/shear/z_dem", dem.z, "1");
     h5.attribute("/shear", "fit", it->first);
     Json& js = summary["shear_validation"];
     js = Json::object();
@@ -434,7 +465,7 @@ void run_continuum_fit(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("continuum_fit.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

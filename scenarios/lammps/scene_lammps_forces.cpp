@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/lammps/lammps_dump.hpp"
 #include "core/lammps/lammps_forces.hpp"
@@ -64,20 +65,50 @@ Json state_json(const LammpsForceField& ff, double nktv2p) {
   return s;
 }
 
-void write_state(H5Writer& h5, const LammpsForceField& ff, double nktv2p) {
+// The units of the stored quantities: the data file's own, those of LAMMPS' unit style
+// (LAMMPS' `units` page; velocities in length per time-step unit, as fix nve/sphere
+// integrates them). The virial sums r f (energy units); torques are in energy units.
+struct StyleUnits {
+  std::string length, velocity, angular_velocity, force, torque, energy, pressure;
+};
+StyleUnits style_units(const std::string& style) {
+  if (style == "si") return {"m", "m s-1", "rad s-1", "N", "N m", "J", "Pa"};
+  if (style == "cgs") return {"cm", "cm s-1", "rad s-1", "dyn", "dyn cm", "erg", "dyn cm-2"};
+  if (style == "micro")
+    return {"um",           "um us-1",      "rad us-1",    "pg um us-2",
+            "pg um+2 us-2", "pg um+2 us-2", "pg um-1 us-2"};
+  if (style == "nano")
+    return {"nm",           "nm ns-1",      "rad ns-1",    "ag nm ns-2",
+            "ag nm+2 ns-2", "ag nm+2 ns-2", "ag nm-1 ns-2"};
+  if (style == "real")
+    return {"Angstrom",   "Angstrom fs-1", "rad fs-1", "kcal mol-1 Angstrom-1",
+            "kcal mol-1", "kcal mol-1",    "atm"};
+  if (style == "metal")
+    return {"Angstrom", "Angstrom ps-1", "rad ps-1", "eV Angstrom-1", "eV", "eV", "bar"};
+  if (style == "electron")
+    return {"Bohr", "Bohr fs-1", "rad fs-1", "Hartree Bohr-1", "Hartree", "Hartree", "Pa"};
+  // lj, the one style left (lammps_units refuses any other): LAMMPS' reduced units, every
+  // quantity in terms of the deck's sigma (length), epsilon (energy), m (mass) and
+  // tau = sigma sqrt(m / epsilon) (time).
+  return {"1", "1", "1", "1", "1", "1", "1"};
+}
+
+void write_state(H5Writer& h5, const LammpsForceField& ff, const LammpsUnits& units) {
+  const StyleUnits u = style_units(units.style);
+  const double nktv2p = units.nktv2p;
   const std::string g = "/step_" + std::to_string(ff.steps_done);
   std::vector<double> ids(ff.id.begin(), ff.id.end());
   const std::vector<hsize_t> dims = {static_cast<hsize_t>(ff.size()), 3};
-  h5.write(g + "/id", ids);
-  h5.write(g + "/position", ff.x, dims);
-  h5.write(g + "/velocity", ff.v, dims);
-  h5.write(g + "/angular_velocity", ff.omega, dims);
-  h5.write(g + "/force", ff.force, dims);
-  h5.write(g + "/torque", ff.torque, dims);
+  write_quantity(h5, g + "/id", ids, "1");
+  write_quantity(h5, g + "/position", ff.x, u.length, dims);
+  write_quantity(h5, g + "/velocity", ff.v, u.velocity, dims);
+  write_quantity(h5, g + "/angular_velocity", ff.omega, u.angular_velocity, dims);
+  write_quantity(h5, g + "/force", ff.force, u.force, dims);
+  write_quantity(h5, g + "/torque", ff.torque, u.torque, dims);
   std::vector<double> w(ff.virial.begin(), ff.virial.end()), p;
   for (double c : ff.virial) p.push_back(c / ff.box.volume() * nktv2p);
-  h5.write(g + "/pair_virial", w);
-  h5.write(g + "/pair_pressure_tensor", p);
+  write_quantity(h5, g + "/pair_virial", w, u.energy);
+  write_quantity(h5, g + "/pair_pressure_tensor", p, u.pressure);
   h5.attribute(g, "contacts", static_cast<double>(ff.contacts));
   h5.attribute(g, "kinetic_energy", ff.kinetic_energy());
 }
@@ -124,7 +155,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   Json states = Json::array();
   auto record = [&] {
     check_finite(ff);
-    write_state(h5, ff, units.nktv2p);
+    write_state(h5, ff, units);
     states.push(state_json(ff, units.nktv2p));
     write_text_file(opts.out_dir + "/forces_step_" + std::to_string(ff.steps_done) + ".lammpstrj",
                     dump_text(ff));
@@ -167,7 +198,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   summary["states"] = states;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   summary["run"] = run_record(wall, "complete", "");
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("lammps_forces.py", opts.out_dir + "/results.h5", opts.out_dir);
   std::cout << "lammps_forces: " << ff.size() << " atoms, " << model.describe() << ", " << steps
             << " steps; outputs in " << opts.out_dir << "\n";

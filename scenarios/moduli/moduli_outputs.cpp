@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
+#include "core/io/dataset_units.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/error.hpp"
 
@@ -100,6 +102,36 @@ std::map<std::string, std::vector<double>> ModuliOutputs::sweep_columns(
   for (const auto& [name, v] : sweep_data)
     if (name.compare(0, prefix.size(), prefix) == 0) cols[name.substr(prefix.size())] = v;
   return cols;
+}
+
+const std::string& column_unit(const ColumnUnits& units, const std::string& column,
+                               const std::string& dataset) {
+  const auto it = units.find(column);
+  if (it == units.end())
+    throw std::logic_error("results.h5: dataset " + dataset +
+                           " has no unit; add its column to the scene's unit table");
+  return it->second;
+}
+
+void ModuliOutputs::write_results(H5Writer& h5, const ModuliUnits& units) const {
+  // The sweep column is the last part of the dataset's path (names never hold '/').
+  const auto sweep_column = [](const std::string& name) {
+    return name.substr(name.rfind('/') + 1);
+  };
+  // All units first: a column left out of the table stops here, before any dataset is written.
+  std::vector<std::string> table_units, prep_units, sweep_units;
+  for (const auto& [k, v] : table)
+    table_units.push_back(column_unit(units.table, k, "/table/" + k));
+  for (const auto& [k, v] : prep)
+    prep_units.push_back(column_unit(units.prep, k, "/preparation/" + k));
+  for (const auto& [k, v] : sweep_data)
+    sweep_units.push_back(column_unit(units.sweep, sweep_column(k), k));
+  size_t i = 0;
+  for (const auto& [k, v] : table) write_quantity(h5, "/table/" + k, v, table_units[i++]);
+  i = 0;
+  for (const auto& [k, v] : prep) write_quantity(h5, "/preparation/" + k, v, prep_units[i++]);
+  i = 0;
+  for (const auto& [k, v] : sweep_data) write_quantity(h5, k, v, sweep_units[i++]);
 }
 
 namespace {

@@ -13,6 +13,20 @@
 
 namespace granular {
 
+// The unit of each column of a study by its name (H5MD spelling, "1" for a pure number):
+// the parts a study checkpoints and merges hold values only, so the units are attached where
+// results.h5 is written, from the driver's own table of its columns.
+using ColumnUnits = std::map<std::string, std::string>;
+struct ModuliUnits {
+  ColumnUnits table;  // /table/<column>
+  ColumnUnits prep;   // /preparation/<column>
+  ColumnUnits sweep;  // <group>/<column> of the sweeps, by the column's name in its group
+};
+// The unit of `column`; a column without one is a programming error (std::logic_error naming
+// `dataset`): every dataset of results.h5 carries its unit.
+const std::string& column_unit(const ColumnUnits& units, const std::string& column,
+                               const std::string& dataset);
+
 struct ModuliOutputs {
   Json rows = Json::array();
   Json sweeps = Json::array();
@@ -38,6 +52,10 @@ struct ModuliOutputs {
   void append(const ModuliOutputs& part);
   // The sweep columns stored under `group`, by name.
   std::map<std::string, std::vector<double>> sweep_columns(const std::string& group) const;
+  // Writes the table (/table/<column>), the preparation series (/preparation/<column>) and
+  // the sweeps (<group>/<column>) into `h5`, each with its unit from `units`. Every column's
+  // unit is looked up before anything is written.
+  void write_results(H5Writer& h5, const ModuliUnits& units) const;
 };
 
 // Scatter of K* and G* over the samples (seeds) of one preparation friction, size and target.

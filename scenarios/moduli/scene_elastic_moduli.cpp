@@ -55,6 +55,92 @@ Model preparation_model(const Model& model, const PrepVariant& v) {
   if (!std::isnan(v.kc)) prep = with_cohesion(prep, v.kc);
   return prep;
 }
+
+// The units of the study's columns (analyse in moduli_probing.hpp, prepare in
+// moduli_preparation.hpp), in the engine's units (mm, us, ug). The "_star" moduli and
+// pressures are divided by each configuration's scale k_n / dbar (k_n: kn_mean; P / k1_star
+// by k1 / dbar), the theories give the same dimensionless moduli, and strains, inertial
+// numbers, fractions, fluctuations (eta), fabric and relative changes are pure numbers.
+ModuliUnits elastic_moduli_units() {
+  ModuliUnits u;
+  for (const char* k : {"mu_preparation",
+                        "seed",
+                        "ekin_over_epot",
+                        "inertial_number_preparation",
+                        "phi_target",
+                        "particles",
+                        "jammed",
+                        "phi",
+                        "z_corrected",
+                        "chi",
+                        "rattler_fraction",
+                        "pressure_star",
+                        "kt_kn",
+                        "inertial_number_probe",
+                        "probe_strain_steps",
+                        "K_star",
+                        "G_star",
+                        "M_star",
+                        "K_n_star",
+                        "K_t_star",
+                        "G_n_star",
+                        "G_t_star",
+                        "M_over_K_plus_4G_3",
+                        "isotropic_reversal_residual",
+                        "eta_K",
+                        "eta_G",
+                        "eta_M",
+                        "eta_K_per_contact",
+                        "eta_K_normal",
+                        "normal_relaxation_K",
+                        "halving_amplitude_rel_change_K",
+                        "halving_amplitude_rel_change_G",
+                        "halving_amplitude_rel_change_M",
+                        "halving_rate_rel_change_K",
+                        "halving_rate_rel_change_G",
+                        "halving_rate_rel_change_M",
+                        "K_emt",
+                        "G_emt",
+                        "K_ft1",
+                        "G_ft1",
+                        "K_ft2",
+                        "G_ft2",
+                        "K_ft2_closure",
+                        "G_ft2_closure",
+                        "rho",
+                        "rho_s",
+                        "zeta",
+                        "fabric_xx",
+                        "fabric_yy",
+                        "fabric_zz",
+                        "fabric_xy",
+                        "fabric_xz",
+                        "fabric_yz",
+                        "pressure_over_k1_star",
+                        "pressure_normal_star",
+                        "pressure_tangential_star"})
+    u.table[k] = "1";
+  u.table["kn_mean"] = "N mm-1";         // mean normal contact stiffness
+  u.table["kc_preparation"] = "N mm-1";  // adhesive stiffness k_c
+  for (const char* k : {"phi", "z_corrected", "inertial_number", "variant", "direction",
+                        "pressure_star", "ekin_over_epot"})
+    u.prep[k] = "1";
+  u.prep["pressure"] = "MPa";
+  u.prep["volumetric_strain_rate"] = "us-1";
+  for (int q = 0; q < 7; ++q) {
+    const std::string k = "contact_fraction_" + std::to_string(q) + (q == 6 ? "_or_more" : "");
+    u.table[k] = u.prep[k] = "1";
+  }
+  // Amplitude sweeps (/sweep/...) and reversibility tests (/reversibility/...): strains,
+  // dimensionless moduli, counts and ratios.
+  for (const char* k :
+       {"amplitude", "K_star", "G_star", "M_star", "eta_K", "eta_G", "eta_M", "inertial_number",
+        "strain_steps", "reversal_residual", "fabric_v_change_K", "fabric_v_change_G",
+        "fabric_dev_change_G", "prestrain", "mode", "loading_modulus_star",
+        "unloading_modulus_star", "residual", "relaxed_ekin_over_epot"})
+    u.sweep[k] = "1";
+  return u;
+}
 }  // namespace
 
 void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
@@ -200,9 +286,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   if (!ensemble::root()) return;
   if (stopped) return;  // the checkpoints in variants/ are the output so far
   H5Writer h5(opts.out_dir + "/results.h5");
-  for (const auto& [k, v] : out.table) h5.write("/table/" + k, v);
-  for (const auto& [k, v] : out.prep) h5.write("/preparation/" + k, v);
-  for (const auto& [k, v] : out.sweep_data) h5.write(k, v);
+  out.write_results(h5, elastic_moduli_units());
   h5.commit();
   summary["configurations"] = out.configs;
   // The configurations are large restartable files the run regenerates; a summary kept as a
@@ -292,7 +376,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
     }
     summary["size_scatter"] = sc;
   }
-  write_summary(opts.out_dir + "/summary.json", summary, {"table"});
+  write_scene_summary(opts, summary, {"table"});
   remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

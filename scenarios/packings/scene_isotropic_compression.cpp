@@ -9,6 +9,7 @@
 #include <iostream>
 #include <map>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/contact/contact_model.hpp"
@@ -45,6 +46,28 @@ const char* const kSeries[] = {"time",
                                "stress_zz",
                                "neighbor_builds",
                                "phase"};
+// Their units (mm, us, ug: stresses in MPa, energies in mJ). pressure_star is P <d> / k_n;
+// max_overlap is the largest delta / min(a_i, a_j); phase is 0 (compression) or 1 (relaxation).
+const char* const kSeriesUnits[] = {
+    "us",   // time
+    "1",    // step
+    "1",    // phi
+    "MPa",  // pressure
+    "1",    // pressure_star
+    "1",    // z
+    "1",    // z_corrected
+    "1",    // rattler_fraction
+    "mJ",   // ekin
+    "mJ",   // epot
+    "1",    // ekin_over_epot
+    "1",    // max_overlap
+    "MPa",  // stress_xx
+    "MPa",  // stress_yy
+    "MPa",  // stress_zz
+    "1",    // neighbor_builds
+    "1",    // phase
+};
+static_assert(std::size(kSeries) == std::size(kSeriesUnits), "a unit for every column");
 
 struct Series {
   std::map<std::string, std::vector<double>> col;
@@ -71,6 +94,8 @@ struct Series {
   }
   void write(H5Writer& out, const std::string& group) const {
     for (const auto& [name, v] : col) out.write(group + "/" + name, v);
+    for (size_t c = 0; c < std::size(kSeries); ++c)
+      if (col.count(kSeries[c])) set_unit(out, group + "/" + kSeries[c], kSeriesUnits[c]);
   }
   void read(const H5Reader& in, const std::string& group) {
     for (const char* name : kSeries) col[name] = in.reals(group + "/" + name);
@@ -313,7 +338,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   // Volumetric inertial number at the end of compression, I_v = rate <d> sqrt(rho / P).
   res["inertial_number_final"] =  // undefined without pressure
       fin.pressure > 0 ? Json(rate * d_mean * std::sqrt(gas.density / fin.pressure)) : Json();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
   if (opts.charts)

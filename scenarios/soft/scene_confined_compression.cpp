@@ -9,6 +9,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/dem/dem_system.hpp"
@@ -294,7 +295,8 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
         const auto q = wall_quad(w.normal, x, sys.box());
         quads.insert(quads.end(), q.begin(), q.end());
       }
-      snap->write("/snapshot_walls/quads", quads, {static_cast<hsize_t>(quads.size() / 3), 3});
+      write_quantity(*snap, "/snapshot_walls/quads", quads, "mm",
+                     {static_cast<hsize_t>(quads.size() / 3), 3});
       snapped = true;
     }
   }
@@ -330,10 +332,10 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
       curve = compress(m, sm.mc, c, state, sm.label, opts, k == 0 ? &h5 : nullptr);
     });
     const std::string g = "/runs/" + sm.label;
-    h5.write(g + "/time", curve.time);
-    h5.write(g + "/strain", curve.strain);
-    h5.write(g + "/top_wall_force", curve.force);
-    h5.write(g + "/top_wall_position", curve.position);
+    write_quantity(h5, g + "/time", curve.time, "us");
+    write_quantity(h5, g + "/strain", curve.strain, "1");
+    write_quantity(h5, g + "/top_wall_force", curve.force, "N");
+    write_quantity(h5, g + "/top_wall_position", curve.position, "mm");
     h5.attribute(g, "wall_seconds", curve.wall_seconds);
     curve.walls.write(h5, g + "/walls");
     Json j = Json::object();
@@ -364,7 +366,7 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.commit();
   write_scene_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", "/snapshot", c.fill.count,
                    "/snapshot_walls", 6);
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("confined_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

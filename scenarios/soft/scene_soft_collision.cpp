@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/charts.hpp"
@@ -73,9 +74,9 @@ Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, i
     sys.check_health(sys.measure());
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  h5.write(group + "/time", t);
-  h5.write(group + "/kinetic_energy", ekin);
-  h5.write(group + "/centre_overlap", overlap);
+  write_quantity(h5, group + "/time", t, "us");
+  write_quantity(h5, group + "/kinetic_energy", ekin, "mJ");
+  write_quantity(h5, group + "/centre_overlap", overlap, "mm");
   const double max_overlap = *std::max_element(overlap.begin(), overlap.end());
   Json j = Json::object();
   j["max_centre_overlap"] = max_overlap;
@@ -134,7 +135,7 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
   summary["runs"] = runs;
   h5.attribute("/", "radius", a);
   h5.commit();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts) run_plot_script("soft_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 

@@ -33,7 +33,9 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <stdexcept>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/finite.hpp"
@@ -367,6 +369,61 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
   }
 }
 
+// Units of the table's columns (run_variant's rows) in results.h5; a column without one is
+// a programming error (std::logic_error), found before anything is written.
+std::string table_unit(const std::string& column) {
+  static const std::map<std::string, std::string> units = {
+      {"soft_fraction", "1"},
+      {"pair_rule_product_over_sum", "1"},
+      {"pressure_target", "MPa"},
+      {"pressure", "MPa"},
+      {"servo_converged", "1"},
+      {"servo_checks", "1"},
+      {"servo_steps", "1"},
+      {"ekin_over_epot", "1"},
+      {"jammed", "1"},
+      {"particles", "1"},
+      {"phi", "1"},
+      {"z_corrected", "1"},
+      {"z_mean", "1"},
+      {"rattler_fraction", "1"},
+      {"max_overlap", "1"},  // delta / min(a_i, a_j)
+      {"rho_bulk", "ug mm-3"},
+      {"rho_solid", "ug mm-3"},
+      {"crossing_time", "us"},
+      {"damping_time", "us"},
+      {"probe_strain_steps", "1"},
+      {"probe_relax_steps", "1"},
+      {"K", "MPa"},
+      {"G", "MPa"},
+      {"M", "MPa"},
+      {"M_KG", "MPa"},
+      {"M_over_M_KG", "1"},
+      {"Vp", "m s-1"},  // 1000 sqrt(M / rho_bulk): mm/us converted to m/s
+      {"isotropic_reversal_residual", "1"},
+      {"M_other_rule_same_packing", "MPa"},
+  };
+  const auto at = units.find(column);
+  if (at == units.end())
+    throw std::logic_error("results.h5: dataset /table/" + column +
+                           " has no unit; add its column to table_unit");
+  return at->second;
+}
+
+// Units of the fit columns: exponents and their standard errors are pure numbers; the
+// prefactor A of y = A P^n, P in MPa, is the modulus at P = 1 MPa.
+std::string fit_unit(const std::string& column) {
+  if (column == "soft_fraction") return "1";
+  const auto ends = [&](const std::string& tail) {
+    return column.size() >= tail.size() &&
+           column.compare(column.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  if (ends("_exponent") || ends("_exponent_stderr")) return "1";
+  if (ends("_prefactor")) return "MPa";
+  throw std::logic_error("results.h5: dataset /fits/" + column +
+                         " has no unit; add its column to fit_unit");
+}
+
 }  // namespace
 
 void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
@@ -511,9 +568,14 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
         "smaller unlike friction also changes the packing)";
   }
 
+  std::vector<std::string> table_units, fit_units;  // all of them before anything is written
+  for (const auto& [k, v] : T) table_units.push_back(table_unit(k));
+  for (const auto& [k, v] : fit_cols) fit_units.push_back(fit_unit(k));
   H5Writer h5(opts.out_dir + "/results.h5");
-  for (const auto& [k, v] : T) h5.write("/table/" + k, v);
-  for (const auto& [k, v] : fit_cols) h5.write("/fits/" + k, v);
+  size_t col = 0;
+  for (const auto& [k, v] : T) write_quantity(h5, "/table/" + k, v, table_units[col++]);
+  col = 0;
+  for (const auto& [k, v] : fit_cols) write_quantity(h5, "/fits/" + k, v, fit_units[col++]);
   h5.commit();
 
   Json summary = scene_summary(scene, "mixture_moduli");
@@ -573,7 +635,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
       hi = max_keep_nan(hi, T.at("M_over_M_KG")[i]);
   summary["M_over_K_plus_4G_3_range"] =  // null when no configuration jammed
       lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
-  write_summary(opts.out_dir + "/summary.json", summary, {"table"});
+  write_scene_summary(opts, summary, {"table"});
   remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
   if (opts.charts) run_plot_script("mixture_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

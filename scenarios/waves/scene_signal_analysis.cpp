@@ -5,7 +5,9 @@
 #include <cmath>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/signal/synthetic_signals.hpp"
 #include "core/signal/trace_io.hpp"
@@ -18,7 +20,18 @@ namespace granular {
 
 namespace {
 
-Trace read_input_trace(const SceneFile& s, const std::string& k) {
+// An input trace and its units: `<k>.time_unit` and `<k>.amplitude_unit` where the scene
+// gives them, else the `unit` attributes of its HDF5 datasets (an engine results.h5 carries
+// them), else "1" (numbers in the scene's reduced units, as the shipped example traces,
+// which the synthetic scene wrote).
+Trace read_input_trace(const SceneFile& s, const std::string& k, TraceUnits& units) {
+  units = {"1", "1"};
+  const std::string given_time = s.text(k + ".time_unit", ""),
+                    given_amplitude = s.text(k + ".amplitude_unit", "");
+  const auto apply_given = [&] {
+    if (!given_time.empty()) units.time = given_time;
+    if (!given_amplitude.empty()) units.amplitude = given_amplitude;
+  };
   const std::string file = s.input_path(k + ".file");
   const std::string format = s.text(k + ".format", "csv");
   s.require(format == "csv" || format == "hdf5", k + ".format", "must be \"csv\" or \"hdf5\"");
@@ -27,9 +40,16 @@ Trace read_input_trace(const SceneFile& s, const std::string& k) {
       const long tc = s.integer(k + ".time_column", 0), ac = s.integer(k + ".amplitude_column", 1);
       s.require(tc >= 0 && ac >= 0 && tc != ac, k + ".amplitude_column",
                 "columns must be distinct and non-negative");
+      apply_given();
       return read_trace_csv(file, static_cast<int>(tc), static_cast<int>(ac));
     }
-    return read_trace_h5(file, s.text(k + ".time_dataset"), s.text(k + ".amplitude_dataset"));
+    const std::string td = s.text(k + ".time_dataset"), ad = s.text(k + ".amplitude_dataset");
+    Trace tr = read_trace_h5(file, td, ad);
+    const std::string tu = read_dataset_unit(file, td), au = read_dataset_unit(file, ad);
+    if (!tu.empty()) units.time = tu;
+    if (!au.empty()) units.amplitude = au;
+    apply_given();
+    return tr;
   } catch (const InputError& e) {
     s.require(false, k + ".file", e.what());
   }
@@ -136,12 +156,14 @@ void run_synthetic(const Synthetic& y, const SignalSettings& base, H5Writer& h5,
             col_fit_err.push_back(ok > 0 ? fit_err / ok : NAN);
       }
   out["estimator_error"] = table;
-  h5.write("/estimator/noise", col_noise);
-  h5.write("/estimator/band_fraction", col_fraction);
-  h5.write("/estimator/window", col_window);
-  h5.write("/estimator/mean_relative_error", col_mean);
-  h5.write("/estimator/sd_relative_error", col_sd);
-  h5.write("/estimator/fit_error", col_fit_err);
+  // Reduced units: the noise is in units of the Ricker source's peak amplitude (1); the
+  // errors are relative to 1/Q; window is an index into the `windows` attribute.
+  write_quantity(h5, "/estimator/noise", col_noise, "1");
+  write_quantity(h5, "/estimator/band_fraction", col_fraction, "1");
+  write_quantity(h5, "/estimator/window", col_window, "1");
+  write_quantity(h5, "/estimator/mean_relative_error", col_mean, "1");
+  write_quantity(h5, "/estimator/sd_relative_error", col_sd, "1");
+  write_quantity(h5, "/estimator/fit_error", col_fit_err, "1");
   h5.attribute("/estimator", "windows", "whole,span,lobe,mirrored");
   h5.attribute("/estimator", "q", y.q);
   // The noise-free pair through the full analysis of this scene's settings.
@@ -158,15 +180,16 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
   SignalSettings settings = read_signal_settings(scene, "analysis", 0.0);
   Synthetic syn;
   Trace tr[2];
+  TraceUnits units[2];
   int count = 0;
   double delay = -1;
   if (synthetic) {
     syn = read_synthetic(scene);
     if (!scene.has("analysis.picker.noise_end")) settings.picker.noise_end = syn.source_time / 2;
   } else {
-    tr[0] = read_input_trace(scene, "trace1");
+    tr[0] = read_input_trace(scene, "trace1", units[0]);
     count = 1;
-    if (scene.has("trace2")) tr[1] = read_input_trace(scene, "trace2"), count = 2;
+    if (scene.has("trace2")) tr[1] = read_input_trace(scene, "trace2", units[1]), count = 2;
     delay = scene.real("analysis.ratio.delay", -1.0);
     scene.require(delay == -1.0 || delay > 0, "analysis.ratio.delay",
                   "must be positive (absent: the difference of the picked times)");
@@ -197,7 +220,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
       j["picks"] = picks_json(p[k]);
       j["spectrum"] = spectrum_json(s[k]);
       traces[name] = j;
-      write_signal(h5, "/" + name, tr[k], p[k], s[k]);
+      write_signal(h5, "/" + name, tr[k], p[k], s[k], units[k]);
       std::cout << name << ": first arrival " << p[k].first_arrival << ", first peak "
                 << p[k].first_peak << ", first trough " << p[k].first_trough
                 << ", dominant frequency " << s[k].dominant_frequency << "\n";
@@ -223,8 +246,9 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
       }
       const SpectralRatioFit f = analyse_ratio(tr[0], p[0], tr[1], p[1], settings, delay);
       summary["spectral_ratio"] = ratio_json(f);
-      h5.write("/ratio/frequency", f.f);
-      h5.write("/ratio/log_ratio", f.log_ratio);
+      // both spectra on trace1's frequency grid, in its time unit
+      write_quantity(h5, "/ratio/frequency", f.f, frequency_unit(units[0]));
+      write_quantity(h5, "/ratio/log_ratio", f.log_ratio, "1");  // ln(A2/A1)
       h5.attribute("/ratio", "slope", f.slope);
       h5.attribute("/ratio", "intercept", f.intercept);
       h5.attribute("/ratio", "Q", f.q);
@@ -234,7 +258,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
   }
   h5.attribute("/", "synthetic", synthetic ? 1.0 : 0.0);
   h5.commit();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("signal_analysis.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/progress.hpp"
 #include "core/run/rng.hpp"
@@ -463,6 +464,10 @@ namespace {
 
 const char* kPickers[3] = {"first_arrival", "first_peak", "first_trough"};
 
+// The recorded signals: times in us; the source wall's velocity and the slabs' mean
+// x-velocity in mm/us, the receiver wall's force per cross-section area in MPa.
+const TraceUnits kVelocityTrace = {"us", "mm us-1"}, kStressTrace = {"us", "MPa"};
+
 // A signal without a picked first event has no spectrum: an empty one, reported as such.
 Spectrum safe_spectrum(const Trace& tr, const Picks& p, const SignalSettings& s) {
   try {
@@ -603,9 +608,10 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     }
     row["amplitudes"] = amps;
     row["travel"] = travel_times(pin, pout, p.gap, p.rho_bulk, nullptr);
-    write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals));
+    write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals),
+                 kVelocityTrace);
     const Spectrum sf = safe_spectrum(ref.force, pout, w.signals);
-    write_signal(h5, g + "/receiver", ref.force, pout, sf);
+    write_signal(h5, g + "/receiver", ref.force, pout, sf, kStressTrace);
     row["receiver_spectrum"] = spectrum_json(sf);
     {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
        // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
@@ -615,8 +621,8 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
       const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);
       row["receiver_spectrum_mirrored"] = spectrum_json(sm);
       fdom_mirrored = sm.dominant_frequency;
-      h5.write(g + "/receiver_mirrored/frequency", sm.f);
-      h5.write(g + "/receiver_mirrored/energy", sm.energy);
+      write_quantity(h5, g + "/receiver_mirrored/frequency", sm.f, frequency_unit(kStressTrace));
+      write_quantity(h5, g + "/receiver_mirrored/energy", sm.energy, energy_unit(kStressTrace));
     }
     // Slabs: travel times, spectra, Q between the first and the last.
     std::vector<Picks> ps;
@@ -624,7 +630,7 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     for (size_t s = 0; s < ref.slabs.size(); ++s) {
       ps.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
       const Spectrum ss = safe_spectrum(ref.slabs[s], ps[s], w.signals);
-      write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss);
+      write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss, kVelocityTrace);
       h5.attribute(g + "/slab_" + std::to_string(s), "distance", ref.slab_x[s]);
       Json sj = Json::object();
       sj["distance"] = ref.slab_x[s];
@@ -649,8 +655,8 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
         const SpectralRatioFit f =
             analyse_ratio(ref.slabs[0], ps[0], ref.slabs[last], ps[last], w.signals);
         row["spectral_ratio"] = ratio_json(f);
-        h5.write(g + "/ratio/frequency", f.f);
-        h5.write(g + "/ratio/log_ratio", f.log_ratio);
+        write_quantity(h5, g + "/ratio/frequency", f.f, frequency_unit(kVelocityTrace));
+        write_quantity(h5, g + "/ratio/log_ratio", f.log_ratio, "1");  // ln(A2/A1)
         h5.attribute(g + "/ratio", "slope", f.slope);
         h5.attribute(g + "/ratio", "intercept", f.intercept);
         q = f.q, qerr = f.q_error;
@@ -717,20 +723,21 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     h5.attribute(g, "gap", p.gap);
   }
   summary["states"] = table;
-  h5.write("/table/sigma_xx", col_p);
-  h5.write("/table/phi", col_phi);
-  h5.write("/table/rho_bulk", col_rho);
-  h5.write("/table/V_p_first_peak", col_vp);
-  h5.write("/table/M_wave", col_mwave);
-  h5.write("/table/M_probe", col_mprobe);
-  h5.write("/table/Q", col_q);
-  h5.write("/table/Q_error", col_qerr);
-  h5.write("/table/receiver_dominant_frequency_mirrored", col_fdom);
+  write_quantity(h5, "/table/sigma_xx", col_p, "MPa");
+  write_quantity(h5, "/table/phi", col_phi, "1");
+  // rho_bulk: the particles' mass over the volume between the walls
+  write_quantity(h5, "/table/rho_bulk", col_rho, "ug mm-3");
+  write_quantity(h5, "/table/V_p_first_peak", col_vp, "mm us-1");
+  write_quantity(h5, "/table/M_wave", col_mwave, "MPa");  // rho_bulk V_p^2
+  write_quantity(h5, "/table/M_probe", col_mprobe, "MPa");
+  write_quantity(h5, "/table/Q", col_q, "1");
+  write_quantity(h5, "/table/Q_error", col_qerr, "1");
+  write_quantity(h5, "/table/receiver_dominant_frequency_mirrored", col_fdom, "us-1");
   h5.attribute("/", "states", static_cast<double>(states.size()));
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   h5.commit();
-  write_summary(opts.out_dir + "/summary.json", summary);
+  write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("wave_transmission.py", opts.out_dir + "/results.h5", opts.out_dir);
 }

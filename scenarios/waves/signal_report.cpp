@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "core/io/dataset_units.hpp"
 
 namespace granular {
 
@@ -121,13 +125,56 @@ Json ratio_json(const SpectralRatioFit& r) {
   return j;
 }
 
+std::string unit_product(const std::vector<std::pair<std::string, int>>& factors) {
+  double number = 1;
+  std::vector<std::pair<std::string, long>> symbols;  // in the order they first appear
+  for (const auto& [unit, power] : factors) {
+    std::istringstream in(unit);
+    std::string token;
+    while (in >> token) {
+      char* end = nullptr;
+      const double v = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() && *end == '\0') {  // a numeric factor ("1" included)
+        number *= std::pow(v, power);
+        continue;
+      }
+      // symbol, then an optional signed power ("mm+2", "us-1"; "mm2" read as "mm+2")
+      size_t split = token.find_last_not_of("0123456789") + 1;
+      if (split < token.size() && split > 1 && (token[split - 1] == '+' || token[split - 1] == '-'))
+        --split;
+      const long p = split < token.size() ? std::strtol(token.c_str() + split, nullptr, 10) : 1;
+      const std::string symbol = token.substr(0, split);
+      auto at = std::find_if(symbols.begin(), symbols.end(),
+                             [&](const auto& e) { return e.first == symbol; });
+      if (at == symbols.end()) at = symbols.emplace(symbols.end(), symbol, 0);
+      at->second += p * power;
+    }
+  }
+  std::ostringstream out;
+  out.precision(12);
+  if (number != 1) out << number;
+  for (const auto& [symbol, p] : symbols) {
+    if (p == 0) continue;
+    if (out.tellp() > 0) out << ' ';
+    out << symbol;
+    if (p != 1) out << (p > 0 ? "+" : "") << p;
+  }
+  return out.tellp() > 0 ? out.str() : "1";
+}
+
+std::string frequency_unit(const TraceUnits& u) { return unit_product({{u.time, -1}}); }
+
+std::string energy_unit(const TraceUnits& u) {
+  return unit_product({{u.amplitude, 2}, {u.time, 2}});
+}
+
 void write_signal(H5Writer& h5, const std::string& g, const Trace& tr, const Picks& p,
-                  const Spectrum& s) {
-  h5.write(g + "/time", tr.t);
-  h5.write(g + "/amplitude", tr.a);
-  h5.write(g + "/spectrum/frequency", s.f);
-  h5.write(g + "/spectrum/energy", s.energy);
-  h5.write(g + "/spectrum/samples", s.samples);
+                  const Spectrum& s, const TraceUnits& units) {
+  write_quantity(h5, g + "/time", tr.t, units.time);
+  write_quantity(h5, g + "/amplitude", tr.a, units.amplitude);
+  write_quantity(h5, g + "/spectrum/frequency", s.f, frequency_unit(units));
+  write_quantity(h5, g + "/spectrum/energy", s.energy, energy_unit(units));
+  write_quantity(h5, g + "/spectrum/samples", s.samples, units.amplitude);
   h5.attribute(g + "/spectrum", "window_start", s.window_start);
   h5.attribute(g + "/spectrum", "dominant_frequency", s.dominant_frequency);
   h5.attribute(g, "first_arrival", p.first_arrival);

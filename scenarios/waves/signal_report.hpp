@@ -10,6 +10,7 @@
 //                        band_fraction = 0.1   delay_picker = "first_peak"
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/io/output.hpp"
@@ -47,9 +48,23 @@ SpectralRatioFit analyse_ratio(const Trace& t1, const Picks& p1, const Trace& t2
 Json picks_json(const Picks& p);
 Json spectrum_json(const Spectrum& s);
 Json ratio_json(const SpectralRatioFit& r);
+// The units of a trace's time and amplitude (H5MD spelling, core/io/dataset_units.hpp). Its
+// spectrum's frequencies are in time^-1, its energies |A(f)|^2 in (amplitude time)^2 (A(f) =
+// dt sum a_n e^(-2 pi i f t_n)) and its windowed samples in the amplitude's unit.
+struct TraceUnits {
+  std::string time, amplitude;
+};
+std::string frequency_unit(const TraceUnits& u);
+std::string energy_unit(const TraceUnits& u);
+
+// The H5MD unit string of the product of units raised to powers, e.g. {{"mm us-1", 2},
+// {"us", 2}} -> "mm+2": symbols in the order they first appear, powers summed, "1" when
+// nothing is left; a leading numeric factor ("60 s") is raised too.
+std::string unit_product(const std::vector<std::pair<std::string, int>>& factors);
+
 // /<group>/{time, amplitude} of the trace, /<group>/spectrum/{frequency, energy, samples}
-// and the picks as attributes of <group>.
+// (each with its unit from `units`) and the picks as attributes of <group>.
 void write_signal(H5Writer& h5, const std::string& group, const Trace& tr, const Picks& p,
-                  const Spectrum& s);
+                  const Spectrum& s, const TraceUnits& units);
 
 }  // namespace granular

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Reruns scenes and compares every number of their summary.json and every dataset of their
-results.h5 with the committed reference in scenarios/reference/<scene>/.
+results.h5 with the committed reference in scenarios/reference/<scene>/. Every dataset of the
+new results.h5 must carry a `unit` attribute, the same as the reference's where that has one.
 
     verify_references.py GRANULAR [--scenes a,b,...] [--set fast|slow|full|all] [--work DIR]
 
@@ -98,6 +99,20 @@ def h5_datasets(path):
     return out
 
 
+def h5_units(path):
+    """'h5:/<dataset>' -> its `unit` attribute as text ('' where it has none)."""
+    import h5py
+    out = {}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset):
+            u = obj.attrs.get("unit", "")
+            out["h5:/" + name] = u.decode() if isinstance(u, bytes) else str(u)
+    with h5py.File(path, "r") as f:
+        f.visititems(visit)
+    return out
+
+
 def relative_difference(a, b):
     if isinstance(a, bool) or isinstance(b, bool) or not isinstance(a, (int, float)) \
             or not isinstance(b, (int, float)):
@@ -161,6 +176,15 @@ def compare(name, ref_dir, new_dir):
                 moved.append((key, f"{xf.size} values", f"largest change {d:.3g}", d))
             else:
                 within.append(key)
+    # Every dataset of a new results.h5 carries its unit (docs/data_formats.md), and the
+    # reference's unit where the reference has one.
+    ua = h5_units(ref_dir / "results.h5") if (ref_dir / "results.h5").exists() else {}
+    ub = h5_units(new_dir / "results.h5") if (new_dir / "results.h5").exists() else {}
+    for key in sorted(ub):
+        if not ub[key]:
+            moved.append((key + " unit", ua.get(key) or "(none)", "(none)", math.inf))
+        elif ua.get(key) and ua[key] != ub[key]:  # references older than units have none
+            moved.append((key + " unit", ua[key] or "(none)", ub[key], math.inf))
     return count, moved, within
 
 
@@ -181,8 +205,9 @@ def run_scene(granular, name, work):
 
 
 def selftest(granular, work):
-    """The comparison must see one changed number in summary.json and one changed value in a
-    dataset of results.h5: a copy of a reference, altered, compared with a fresh run."""
+    """The comparison must see one changed number in summary.json, one changed value in a
+    dataset of results.h5 and one dataset whose unit is gone: a copy of a reference, altered,
+    compared with a fresh run whose first dataset lost its unit."""
     import h5py
     name = "impact_glass_wall"
     proc, out, _, _ = run_scene(granular, name, work)
@@ -217,10 +242,15 @@ def selftest(granular, work):
         data = d[()]
         data.flat[0] = data.flat[0] * (1 + 1e-12) if data.flat[0] != 0 else 1e-300
         d[...] = data
+    with h5py.File(out / "results.h5", "r+") as f:
+        if "unit" in f[names[0]].attrs:
+            del f[names[0]].attrs["unit"]
     _, moved, _ = compare(name, altered, out)
     seen = {m[0] for m in moved}
-    ok = key in seen and ("h5:/" + names[0]) in seen and len(moved) == 2
-    print(f"selftest: changed {key} and h5:/{names[0]}; the comparison reported "
+    ok = key in seen and ("h5:/" + names[0]) in seen and \
+        ("h5:/" + names[0] + " unit") in seen and len(moved) == 3
+    print(f"selftest: changed {key} and h5:/{names[0]}, removed the unit of h5:/{names[0]}; "
+          f"the comparison reported "
           f"{sorted(seen)}: {'passed' if ok else 'FAILED'}")
     return 0 if ok else 1
 
