@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
+#include "core/io/output.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/power_law_fit.hpp"
@@ -184,5 +186,49 @@ TEST(MixtureModuliScene, ShippedSceneFilesRead) {
     const SceneFile s = SceneFile::load(granular::testing::shipped_scene_path(name));
     EXPECT_EQ(s.text("scene"), "mixture_moduli");
     EXPECT_NO_THROW(check_mixture_moduli(s)) << name;
+  }
+}
+
+// A state the servo did not bring to its target is not probed: its moduli are NaN, it is left
+// out of the fits, and summary.json lists it; `preparation.probe_unconverged = true` probes it
+// as it is. One servo check cannot bring E_kin/E_pot under 1e-12 after the approach, so every
+// state of this small study is unconverged.
+TEST(MixtureModuliScene, StateTheServoDidNotConvergeToIsNotProbedUnlessAskedFor) {
+  std::string text = granular::testing::read_text(std::string(GRANULAR_SOURCE_DIR) +
+                                                  "/tests/resume/mixture_moduli.toml");
+  granular::testing::replace_once(text, "max_checks = 200", "max_checks = 1");
+  granular::testing::replace_once(text, "ekin_ratio = 1.0e-3", "ekin_ratio = 1.0e-12");
+  for (const bool asked : {false, true}) {
+    std::string t = text;
+    if (asked)
+      granular::testing::replace_once(t, "max_checks = 1",
+                                      "max_checks = 1\nprobe_unconverged = true");
+    SceneFile scene = SceneFile::parse(t, "unconverged.toml");
+    scene.text("scene");
+    RunOptions opts;
+    opts.out_dir = granular::testing::temp_dir(asked ? "mixture_asked" : "mixture_refused");
+    opts.progress = false, opts.charts = false;
+    run_mixture_moduli(scene, opts);
+    const H5Reader h5(opts.out_dir + "/results.h5");
+    const auto converged = h5.reals("/table/servo_converged");
+    const auto jammed = h5.reals("/table/jammed"), probed = h5.reals("/table/probed");
+    const auto M = h5.reals("/table/M"), n = h5.reals("/fits/M_exponent");
+    ASSERT_EQ(M.size(), 3u);
+    for (size_t i = 0; i < M.size(); ++i) {
+      EXPECT_EQ(converged[i], 0.0) << i;
+      ASSERT_EQ(jammed[i], 1.0) << i;  // a contact network: only the servo's verdict differs
+      EXPECT_EQ(probed[i], asked ? 1.0 : 0.0) << i;
+      if (asked)
+        EXPECT_GT(M[i], 0.0) << i;
+      else
+        EXPECT_TRUE(std::isnan(M[i])) << i;
+    }
+    // One pressure per mixture: no exponent either way, but the refused states leave the
+    // fit without a single point (its prefactor too is undefined).
+    for (double e : n) EXPECT_TRUE(std::isnan(e));
+    const std::string summary = granular::testing::read_text(opts.out_dir + "/summary.json");
+    EXPECT_NE(summary.find("\"unconverged_states\": ["), std::string::npos);
+    EXPECT_NE(summary.find(asked ? "\"probed\": true" : "\"probed\": false"), std::string::npos);
+    std::filesystem::remove_all(opts.out_dir);
   }
 }

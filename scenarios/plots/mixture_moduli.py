@@ -15,7 +15,8 @@ with h5py.File(h5, "r") as f:
     fits = {k: f["fits"][k][:] for k in f["fits"]} if "fits" in f else {}
 
 main = t["pair_rule_product_over_sum"] == t["pair_rule_product_over_sum"][0]
-ok = main & (t["jammed"] > 0)
+# Only probed states have moduli (states the servo did not converge to are not probed).
+ok = main & ((t["probed"] > 0) if "probed" in t else (t["jammed"] > 0))
 fractions = sorted(set(t["soft_fraction"][main]))
 cmap = plt.get_cmap("viridis")
 colour = {nu: cmap(i / max(1, len(fractions) - 1)) for i, nu in enumerate(fractions)}

@@ -76,6 +76,7 @@ struct Setup {
   double phi0 = 0.55, gas_rate = 0, gas_relax_time = 0, approach_rate = 0;
   std::vector<double> pressures;
   ServoSettings servo;
+  bool probe_unconverged = false;  // probe a state the servo did not bring to its target
   double gas_damping_time = 0, damping_crossings = 0.5;
   double amplitude = 2e-6, strain_crossings = 1, relax_crossings = 2;
   bool keep_friction = false;
@@ -136,6 +137,7 @@ Setup read_setup(const SceneFile& s) {
   sv.check_crossings = s.real("preparation.check_crossings", 0.25);
   sv.max_cycles = s.small_integer("preparation.max_checks", 2000);
   sv.max_phase_steps = s.integer("preparation.max_phase_steps", 50000);
+  u.probe_unconverged = s.flag("preparation.probe_unconverged", false);
   s.require(sv.tolerance > 0 && sv.tolerance < 0.5, "preparation.tolerance",
             "must lie in (0, 0.5)");
   s.require(sv.ekin_ratio > 0, "preparation.ekin_ratio", "must be positive");
@@ -313,18 +315,27 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
     m = sr.m;
     rho = mass / sys->box().volume();
     tc = crossing_time(m, rho, longest_edge(sys->box()));
+    const ConfigState c = snapshot(*sys, host.density, m.pressure);
+    const bool jammed = is_jammed(m) && std::isfinite(tc);
+    // A state the servo left short of its target, or still moving, is not the state asked
+    // for: its moduli are not measured (NaN) and it is left out of the fits, unless the scene
+    // asks for it to be probed as it is.
+    const bool probed = jammed && (sr.converged || u.probe_unconverged);
     if (!sr.converged)
       std::cerr << v.tag << ": the servo did not reach P = " << target << " MPa within "
                 << u.servo.max_cycles << " checks (P = " << m.pressure
-                << ", E_kin/E_pot = " << sr.ekin_ratio << "); probed as it is\n";
-    const ConfigState c = snapshot(*sys, host.density, m.pressure);
-    const bool jammed = is_jammed(m) && std::isfinite(tc);
+                << ", E_kin/E_pot = " << sr.ekin_ratio << " against " << u.servo.ekin_ratio << "); "
+                << (probed ? "probed as it is (preparation.probe_unconverged)"
+                           : "not probed: raise preparation.max_checks, or set "
+                             "preparation.probe_unconverged = true to probe it as it is")
+                << "\n";
     Probed pr;
-    if (jammed) pr = probe_state(c, probe_model, params, u, tc);
+    if (probed) pr = probe_state(c, probe_model, params, u, tc);
     double M_other = kNaN;
-    if (jammed && reprobe && listed(u.check_pressures, target))
+    if (probed && reprobe && listed(u.check_pressures, target))
       M_other = probe_state(c, other_probe, params, u, tc).mod.M;
     const Moduli& mod = pr.mod;
+    const double unmeasured = jammed ? kNaN : 0.0;
     const double mkg = mod.K + 4 * mod.G / 3;
     std::map<std::string, double> row = {
         {"soft_fraction", v.soft_fraction},
@@ -336,6 +347,7 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
         {"servo_steps", static_cast<double>(sr.steps)},
         {"ekin_over_epot", sr.ekin_ratio},
         {"jammed", jammed ? 1.0 : 0.0},
+        {"probed", probed ? 1.0 : 0.0},
         {"particles", static_cast<double>(c.size())},
         {"phi", m.phi},
         {"z_corrected", m.z_corrected},
@@ -348,12 +360,13 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
         {"damping_time", u.damping_crossings * tc},
         {"probe_strain_steps", static_cast<double>(pr.strain_steps)},
         {"probe_relax_steps", static_cast<double>(pr.relax_steps)},
-        {"K", jammed ? mod.K : 0.0},
-        {"G", jammed ? mod.G : 0.0},
-        {"M", jammed ? mod.M : 0.0},
-        {"M_KG", jammed ? mkg : 0.0},
-        {"M_over_M_KG", jammed ? mod.M / mkg : kNaN},
-        {"Vp", jammed && mod.M > 0 ? 1000.0 * std::sqrt(mod.M / rho) : 0.0},  // m/s
+        // No contact network: no stiffness (0); a network not probed: not measured (NaN).
+        {"K", probed ? mod.K : unmeasured},
+        {"G", probed ? mod.G : unmeasured},
+        {"M", probed ? mod.M : unmeasured},
+        {"M_KG", probed ? mkg : unmeasured},
+        {"M_over_M_KG", probed ? mod.M / mkg : kNaN},
+        {"Vp", probed && mod.M > 0 ? 1000.0 * std::sqrt(mod.M / rho) : unmeasured},  // m/s
         {"isotropic_reversal_residual", pr.reversal},
         {"M_other_rule_same_packing", M_other},
     };
@@ -363,8 +376,8 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
     std::snprintf(line, sizeof line,
                   "%s  P %.4g MPa (target %.4g, %d checks)  phi %.4f  Z %.3f  K %.4g  G %.4g  "
                   "M %.4g MPa  M/(K+4G/3) %.4f  Vp %.0f m/s\n",
-                  v.tag.c_str(), m.pressure, target, sr.cycles, m.phi, m.z_corrected, mod.K, mod.G,
-                  mod.M, jammed ? mod.M / mkg : kNaN, row["Vp"]);
+                  v.tag.c_str(), m.pressure, target, sr.cycles, m.phi, m.z_corrected, row["K"],
+                  row["G"], row["M"], row["M_over_M_KG"], row["Vp"]);
     if (progress.enabled()) std::cerr << line;
   }
 }
@@ -382,6 +395,7 @@ std::string table_unit(const std::string& column) {
       {"servo_steps", "1"},
       {"ekin_over_epot", "1"},
       {"jammed", "1"},
+      {"probed", "1"},
       {"particles", "1"},
       {"phi", "1"},
       {"z_corrected", "1"},
@@ -491,7 +505,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
   progress.finish();
 
-  // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its jammed configurations.
+  // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its probed configurations.
   const auto& T = out.table;
   const size_t rows = T.at("M").size();
   Json fits = Json::array();
@@ -502,7 +516,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
     for (size_t i = 0; i < rows; ++i)
       if (T.at("soft_fraction")[i] == v.soft_fraction &&
           T.at("pair_rule_product_over_sum")[i] == (v.rule == "product_over_sum" ? 1.0 : 0.0) &&
-          T.at("jammed")[i] > 0) {
+          T.at("probed")[i] > 0) {
         P.push_back(T.at("pressure")[i]), M.push_back(T.at("M")[i]);
         K.push_back(T.at("K")[i]), G.push_back(T.at("G")[i]), MKG.push_back(T.at("M_KG")[i]);
       }
@@ -623,14 +637,27 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
       "compressed to jamming, then the isotropic pressure servo (pressure_servo.hpp) until "
       "|P/P_target - 1| < tolerance and E_kin/E_pot < ekin_ratio";
   ch["fit"] =
-      "least squares of log M against log P over the jammed configurations of each mixture "
+      "least squares of log M against log P over the probed configurations of each mixture "
       "(default pair rule); stderr = s / sqrt(sum (log P - mean)^2)";
   summary["table"] = out.rows;
   summary["fits"] = fits;
   if (!u.check_pressures.empty()) summary["pair_rule_check"] = rule;
+  // The states the servo did not converge to, each with whether it was probed anyway.
+  Json unconverged = Json::array();
+  for (size_t i = 0; i < rows; ++i)
+    if (T.at("servo_converged")[i] == 0) {
+      Json e = Json::object();
+      e["soft_fraction"] = T.at("soft_fraction")[i];
+      e["pressure_target"] = T.at("pressure_target")[i];
+      e["pressure"] = T.at("pressure")[i];
+      e["ekin_over_epot"] = T.at("ekin_over_epot")[i];
+      e["probed"] = T.at("probed")[i] > 0;
+      unconverged.push(e);
+    }
+  summary["unconverged_states"] = unconverged;
   double lo = INFINITY, hi = -INFINITY;
   for (size_t i = 0; i < rows; ++i)
-    if (T.at("jammed")[i] > 0)
+    if (T.at("probed")[i] > 0)
       lo = -max_keep_nan(-lo, -T.at("M_over_M_KG")[i]),
       hi = max_keep_nan(hi, T.at("M_over_M_KG")[i]);
   summary["M_over_K_plus_4G_3_range"] =  // null when no configuration jammed
