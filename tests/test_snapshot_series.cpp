@@ -209,6 +209,42 @@ TEST(SnapshotSeries, UnfinishedSeriesLeavesNoFile) {
   fs::remove_all(dir);
 }
 
+// A resumed run starts its series afresh: the XDMF file of the earlier version names frames
+// the new .h5 does not hold, so it goes before the new .h5 is committed. Here the new .h5
+// cannot be committed at all (a folder holds its name): the earlier XDMF must be gone, never
+// left beside a file it does not describe (a kill between the two commits did that).
+TEST(SnapshotSeries, EarlierSeriesXdmfIsRemovedBeforeTheNewSeriesIsCommitted) {
+  const std::string dir = granular::testing::temp_dir("snapshots_resumed");
+  fs::create_directories(dir);
+  const ContactModel<LinearNormal> model{LinearNormal::uniform(1e3, 0.0), {}, {}};
+  HostParticles h;
+  h.resize(2);
+  h.x = {0, 3}, h.y = {0, 0}, h.z = {0, 0}, h.radius = {1, 1}, h.density = {1, 1};
+  PeriodicBox box;
+  for (int d = 0; d < 3; ++d) box.lo[d] = -10, box.len[d] = 20;
+  DemParams prm;
+  prm.dt = 1e-3, prm.skin = 0.2;
+  DemSystem<Kokkos::DefaultExecutionSpace, ContactModel<LinearNormal>> sys(
+      Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, prm);
+  {
+    SnapshotSeries first(dir, "s", 5);
+    first.sample(sys);
+    sys.step(5);
+    first.finish(sys);
+  }
+  ASSERT_TRUE(fs::exists(dir + "/s.xdmf"));
+  fs::remove(dir + "/s.h5");
+  fs::create_directories(dir + "/s.h5/in_the_way");
+  {
+    SnapshotSeries resumed(dir, "s", 5);
+    sys.step(5);
+    resumed.sample(sys);
+    EXPECT_ANY_THROW(resumed.finish(sys));
+  }
+  EXPECT_FALSE(fs::exists(dir + "/s.xdmf"));
+  fs::remove_all(dir);
+}
+
 // ParaView's own XDMF reader (pvpython or pvbatch from Debian's ParaView) loads the series: as many
 // time steps as frames, the particle count and every field in each.
 TEST_F(SnapshotSeriesTest, ParaViewReadsTheSeries) {

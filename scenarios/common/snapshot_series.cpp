@@ -2,6 +2,7 @@
 #include "scenarios/common/snapshot_series.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "granular_config.hpp"
@@ -111,6 +112,11 @@ void SnapshotSeries::append_h5md(const SnapshotFrame& f) {
 
 void SnapshotSeries::commit() {
   if (!h5_) return;
+  // The XDMF file of an earlier version of this series (a resumed run starts its series
+  // afresh where it resumed) goes before the new .h5 replaces the old one: it names frames
+  // the new file does not hold, so a kill between the two commits would leave a mixed set.
+  std::error_code gone;
+  std::filesystem::remove(dir_ + "/" + name_ + ".xdmf", gone);
   h5_->attribute("/", "snapshot_every", static_cast<double>(every_));
   h5_->commit();
   h5_.reset();
