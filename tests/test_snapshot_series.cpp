@@ -179,9 +179,9 @@ TEST(SnapshotSeries, ImpactOnAWallShowsTheWallInEveryFrame) {
   fs::remove_all(dir);
 }
 
-TEST(SnapshotSeries, UnfinishedSeriesLeavesNoFile) {
-  const std::string dir = granular::testing::temp_dir("snapshots_unfinished");
-  fs::create_directories(dir);
+// Two spheres apart in a periodic box: a system to sample, for the tests of the series' files.
+using TwoSpheres = DemSystem<Kokkos::DefaultExecutionSpace, ContactModel<LinearNormal>>;
+TwoSpheres two_spheres() {
   const ContactModel<LinearNormal> model{LinearNormal::uniform(1e3, 0.0), {}, {}};
   HostParticles h;
   h.resize(2);
@@ -190,8 +190,13 @@ TEST(SnapshotSeries, UnfinishedSeriesLeavesNoFile) {
   for (int d = 0; d < 3; ++d) box.lo[d] = -10, box.len[d] = 20;
   DemParams prm;
   prm.dt = 1e-3, prm.skin = 0.2;
-  DemSystem<Kokkos::DefaultExecutionSpace, ContactModel<LinearNormal>> sys(
-      Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, prm);
+  return TwoSpheres(Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, prm);
+}
+
+TEST(SnapshotSeries, UnfinishedSeriesLeavesNoFile) {
+  const std::string dir = granular::testing::temp_dir("snapshots_unfinished");
+  fs::create_directories(dir);
+  TwoSpheres sys = two_spheres();
   {
     SnapshotSeries series(dir, "cut", 5);
     series.sample(sys);
@@ -216,16 +221,7 @@ TEST(SnapshotSeries, UnfinishedSeriesLeavesNoFile) {
 TEST(SnapshotSeries, EarlierSeriesXdmfIsRemovedBeforeTheNewSeriesIsCommitted) {
   const std::string dir = granular::testing::temp_dir("snapshots_resumed");
   fs::create_directories(dir);
-  const ContactModel<LinearNormal> model{LinearNormal::uniform(1e3, 0.0), {}, {}};
-  HostParticles h;
-  h.resize(2);
-  h.x = {0, 3}, h.y = {0, 0}, h.z = {0, 0}, h.radius = {1, 1}, h.density = {1, 1};
-  PeriodicBox box;
-  for (int d = 0; d < 3; ++d) box.lo[d] = -10, box.len[d] = 20;
-  DemParams prm;
-  prm.dt = 1e-3, prm.skin = 0.2;
-  DemSystem<Kokkos::DefaultExecutionSpace, ContactModel<LinearNormal>> sys(
-      Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box, model, prm);
+  TwoSpheres sys = two_spheres();
   {
     SnapshotSeries first(dir, "s", 5);
     first.sample(sys);
