@@ -81,4 +81,34 @@ inline bool bitwise_equal(const std::vector<double>& a, const std::vector<double
          (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
+// A small isotropic_compression scene (300 spheres, seconds) that checkpoints every 2000
+// steps: the checkpoint, resume and run-report tests run it, some with keys added at the end
+// of its [run] table (stop_after).
+inline std::string small_isotropic_scene() {
+  return R"(scene = "isotropic_compression"
+[particles]
+count = 300
+diameter_min = 1.0
+diameter_max = 3.0
+density = 2000.0
+seed = 4
+initial_speed = 1.0e-3
+[contact]
+kn = 1.0e5
+gamma_n = 1000.0
+[damping]
+background = 100.0
+[compression]
+phi_start = 0.4
+phi_end = 0.62
+volumetric_strain_rate = 2.0e-2
+relax_steps = 500
+[run]
+dt = 0.004
+skin = 0.2
+sample_every = 250
+checkpoint_every = 2000
+)";
+}
+
 }  // namespace granular::testing

@@ -625,6 +625,39 @@ double H5Reader::attribute(const std::string& object, const std::string& name) c
   return v;
 }
 
+std::string H5Reader::text_attribute(const std::string& object, const std::string& name) const {
+  std::string text;
+  H5E_BEGIN_TRY {
+    if (H5Aexists_by_name(file_, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
+      const hid_t a =
+          H5Aopen_by_name(file_, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+      const hid_t t = a >= 0 ? H5Aget_type(a) : -1;
+      const hid_t sp = a >= 0 ? H5Aget_space(a) : -1;
+      if (t >= 0 && sp >= 0 && H5Tget_class(t) == H5T_STRING &&
+          H5Sget_simple_extent_npoints(sp) == 1) {
+        if (H5Tis_variable_str(t) > 0) {
+          const hid_t m = H5Tcopy(H5T_C_S1);
+          H5Tset_size(m, H5T_VARIABLE);
+          H5Tset_cset(m, H5Tget_cset(t));
+          char* value = nullptr;
+          if (H5Aread(a, m, &value) >= 0 && value) text = value;
+          if (value) H5free_memory(value);
+          H5Tclose(m);
+        } else {
+          std::vector<char> value(H5Tget_size(t) + 1, '\0');
+          if (H5Aread(a, t, value.data()) >= 0) text = value.data();
+        }
+      }
+      if (sp >= 0) H5Sclose(sp);
+      if (t >= 0) H5Tclose(t);
+      if (a >= 0) H5Aclose(a);
+    }
+  }
+  H5E_END_TRY;
+  const size_t end = text.find_last_not_of(' ');  // space-padded fixed-length strings
+  return end == std::string::npos ? std::string() : text.substr(0, end + 1);
+}
+
 // ---- XDMF --------------------------------------------------------------------------
 void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
                          const std::string& group, int n) {

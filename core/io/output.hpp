@@ -133,6 +133,9 @@ class H5Reader {
   std::vector<double> reals(const std::string& name) const;
   std::vector<int> ints(const std::string& name) const;
   double attribute(const std::string& object, const std::string& name) const;
+  // A scalar string attribute (fixed or variable length, trailing spaces dropped); empty
+  // where the object or the attribute is absent or is not one string.
+  std::string text_attribute(const std::string& object, const std::string& name) const;
 
  private:
   std::string path_;

@@ -53,39 +53,11 @@ Trace read_trace_h5(const std::string& path, const std::string& td, const std::s
 }
 
 std::string read_dataset_unit(const std::string& file, const std::string& dataset) {
-  std::string unit;
-  H5E_BEGIN_TRY {
-    const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    if (f >= 0) {
-      if (H5Aexists_by_name(f, dataset.c_str(), "unit", H5P_DEFAULT) > 0) {
-        const hid_t a = H5Aopen_by_name(f, dataset.c_str(), "unit", H5P_DEFAULT, H5P_DEFAULT);
-        const hid_t t = a >= 0 ? H5Aget_type(a) : -1;
-        const hid_t sp = a >= 0 ? H5Aget_space(a) : -1;
-        if (t >= 0 && sp >= 0 && H5Tget_class(t) == H5T_STRING &&
-            H5Sget_simple_extent_npoints(sp) == 1) {
-          if (H5Tis_variable_str(t) > 0) {
-            const hid_t m = H5Tcopy(H5T_C_S1);
-            H5Tset_size(m, H5T_VARIABLE);
-            H5Tset_cset(m, H5Tget_cset(t));
-            char* text = nullptr;
-            if (H5Aread(a, m, &text) >= 0 && text) unit = text;
-            if (text) H5free_memory(text);
-            H5Tclose(m);
-          } else {
-            std::vector<char> text(H5Tget_size(t) + 1, '\0');
-            if (H5Aread(a, t, text.data()) >= 0) unit = text.data();
-          }
-        }
-        if (sp >= 0) H5Sclose(sp);
-        if (t >= 0) H5Tclose(t);
-        if (a >= 0) H5Aclose(a);
-      }
-      H5Fclose(f);
-    }
+  try {
+    return H5Reader(file).text_attribute(dataset, "unit");
+  } catch (const InputError&) {  // no such file, or not HDF5: no unit
+    return std::string();
   }
-  H5E_END_TRY;
-  const size_t end = unit.find_last_not_of(' ');  // space-padded fixed-length strings
-  return end == std::string::npos ? std::string() : unit.substr(0, end + 1);
 }
 
 }  // namespace granular

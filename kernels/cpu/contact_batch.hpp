@@ -11,8 +11,8 @@
 // the scalar law's operations in the scalar order (no contraction into FMA, branches
 // replaced by selecting between both outcomes, a rare branch skipped only where no lane of a
 // vector takes it), and the sums keep the scalar kernel's order, so the trajectories are
-// bitwise those of the scalar path, on any processor (tests/test_contact_batch.cpp).
-// Measured (perf/README.md, design note): the batch made the frictional step 1.10-1.14x
+// bitwise those of the scalar path, on any processor (tests/kernels/cpu/test_contact_batch.cpp).
+// Measured (docs/perf_design_notes.md, CPUs): the batch made the frictional step 1.10-1.14x
 // faster, and its refinements (the split writing into the batch's slots, parameters
 // broadcast for one species, the rare branches skipped) 1.13-1.18x more; the frictionless
 // law, whose evaluation is a few operations, loses to the gather and scatter in two-lane

@@ -24,13 +24,15 @@
 // kick-drift pass from the values it has just stored: a partner then costs two cache lines of
 // input instead of four, and each quarter of a record comes in with the quarters of three
 // other particles as four aligned loads transposed in registers. The values, and so the bits,
-// are those of the arrays (gains: design note; the frictionless stream gained nothing).
+// are those of the arrays (gains: docs/perf_design_notes.md; the frictionless stream gained
+// nothing).
 //
 // The frictionless linear law reads the stream as well (near_stream_slab_normal): its rows
 // are evaluated contact by contact, not batched, but they pay the same loop per row of
 // unpredictable length and a dependent load of the partner's index through the list. An
 // earlier form that gathered every input lane by lane gained nothing (0.99x); with the
-// loads and the paired scatter of the frictional stream it gains 1.13-1.19x (design note).
+// loads and the paired scatter of the frictional stream it gains 1.13-1.19x
+// (docs/perf_design_notes.md).
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <type_traits>
@@ -156,7 +158,7 @@ using M = ContactBatch::M;
 // The 3-vectors base[3 k .. 3 k + 2] of the four particles (or history rows) k = idx[0..3],
 // as three vectors of four lanes: two 16-byte loads of (x, y) joined into one register per
 // pair of lanes, unpacked into x and y, and the four z joined alike. 1.02-1.04x against
-// three gathers (perf/README.md, design note), the same values.
+// three gathers (docs/perf_design_notes.md, CPUs), the same values.
 GRANULAR_AVX2_INLINE void load3(const double* base, const int* idx, V& X, V& Y, V& Z) {
   const double* const p0 = base + 3 * idx[0];
   const double* const p1 = base + 3 * idx[1];

@@ -78,30 +78,29 @@ class ContactHistory {
     }
   }
 
-  // For exact restarts (see NeighborList::save).
-  void save(H5Writer& out, const std::string& g) const {
+  static constexpr int columns = H;
+  static constexpr bool owner_rows = OwnerRows;
+
+  // For exact restarts (see NeighborList::Saved). `owner_rows` says the rows are one per
+  // owned contact; restarts written before that layout have one row per list entry.
+  struct Saved {
+    values_view values;
+    int_view partner_ids, offsets;
+    bool owner_rows = OwnerRows;
+  };
+  Saved saved() const { return Saved{values_, partner_ids_, begin_, OwnerRows}; }
+  // `nl` must be the list restored from the same restart. Entry rows are converted: the
+  // owned entries' rows are kept.
+  void restore(const Saved& s, const NeighborList<ExecSpace>& nl, const std::string& origin) {
     if constexpr (H > 0) {
-      save_view(out, g + "/values", values_);
-      save_view(out, g + "/partner_ids", partner_ids_);
-      save_view(out, g + "/offsets", begin_);
-      if (OwnerRows) out.write(g + "/owner_rows", std::vector<double>{1.0});
-    }
-  }
-  // `nl` must be the list loaded from the same restart. Restarts written before the owner
-  // rows (one row per list entry) are converted: the owned entries' rows are kept.
-  void load(const H5Reader& in, const std::string& g, const NeighborList<ExecSpace>& nl) {
-    if constexpr (H > 0) {
-      load_view(in, g + "/values", values_);
-      load_view(in, g + "/partner_ids", partner_ids_);
-      load_view(in, g + "/offsets", begin_);
-      const bool entry_rows = !OwnerRows || !in.has(g + "/owner_rows");
+      values_ = s.values, partner_ids_ = s.partner_ids, begin_ = s.offsets;
+      const bool entry_rows = !OwnerRows || !s.owner_rows;
       const int rows = entry_rows ? nl.num_entries() : nl.num_pairs();
       const size_t expect = static_cast<size_t>(rows > 0 ? rows : 1);
-      if (values_.extent(0) != expect || partner_ids_.extent(0) != expect ||
-          begin_.extent(0) != nl.offsets().extent(0))
-        throw InputError("restart group " + g + " has a contact history of " +
-                         std::to_string(values_.extent(0)) + " rows for a list that needs " +
-                         std::to_string(rows));
+      if (values_.extent(0) != expect || values_.extent(1) != static_cast<size_t>(H) ||
+          partner_ids_.extent(0) != expect || begin_.extent(0) != nl.offsets().extent(0))
+        throw InputError(origin + " has a contact history of " + std::to_string(values_.extent(0)) +
+                         " rows for a list that needs " + std::to_string(rows));
       if (OwnerRows && entry_rows) to_owner_rows(nl);
     }
   }

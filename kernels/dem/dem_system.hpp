@@ -58,7 +58,7 @@ struct DemParams {
   // the owned entries within this gap of touching, read instead of the whole rows while no
   // particle has moved half of it (the same bits either way). < 0: a thirty-second of `skin`
   // where the near stream reads it with the frictional law (below), a sixteenth otherwise
-  // (perf/README.md, design note: thinner gaps record more often, which costs about a pass
+  // (docs/perf_design_notes.md, CPUs: thinner gaps record more often, which costs about a pass
   // over the whole rows, and save the apart entries of every other pass; the frictional
   // stream's reads gain from the thinner gap, the rows' and the frictionless stream's do
   // not); 0: no near list.
@@ -73,7 +73,7 @@ struct DemParams {
   // cache lines per partner instead of four, 96 bytes more per particle; the same bits either
   // way), in systems of at least packed_stream_min_particles: it gains 1.18x at N = 262144
   // and costs 0.98x at 4096 and 32768, whose particle arrays the caches hold anyway
-  // (perf/README.md, design note).
+  // (docs/perf_design_notes.md, CPUs).
   bool packed_stream = true;
   int packed_stream_min_particles = 65536;
 };
@@ -367,55 +367,58 @@ class DemSystem {
 
   // Exact restart: everything the next step reads, as it is now (particles in their current
   // order with forces and torques, the neighbour list and its reference positions, contact
-  // and wall histories, box, strain rate, clock). Saving touches nothing, so a run that
-  // writes checkpoints is bitwise the run that does not; loading into a system made from the
-  // same particles, model, parameters and walls continues bitwise where the saved one was.
-  void save_restart(H5Writer& out, const std::string& g) const {
+  // and wall histories, box, strain rate, clock), as the system's own Views: saving touches
+  // nothing, so a run that writes checkpoints is bitwise the run that does not; restoring
+  // into a system made from the same particles, model, parameters and walls continues bitwise
+  // where the saved one was. scenarios/common/restart_file.hpp writes and reads it.
+  using history_type = ContactHistory<ExecSpace, Model::history, true>;
+  using wall_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
+  struct Saved {
+    Particles<ExecSpace> particles;
+    typename NeighborList<ExecSpace>::Saved list;
+    typename history_type::Saved history;
+    wall_view wall_history, wall_record;
+    double time = 0.0;
+    long steps = 0;
+    double particle_volume = 0.0;
+    PeriodicBox box;
+    double rate[3] = {0, 0, 0};
+  };
+  Saved saved() const {
     if (mc_.active())
       throw InputError(
           "exact restarts of multi-contact runs are not supported: their "
           "previous-step contact forces are not saved");
-    // One call per field, spelt out: nvcc's front end rejects the braced list of pairs.
-    const std::string pg = g + "/particles/";
-    save_view(out, pg + "x", p_.x), save_view(out, pg + "v", p_.v);
-    save_view(out, pg + "w", p_.w), save_view(out, pg + "f", p_.f);
-    save_view(out, pg + "torque", p_.torque), save_view(out, pg + "radius", p_.radius);
-    save_view(out, pg + "mass", p_.mass), save_view(out, pg + "inertia", p_.inertia);
-    save_view(out, g + "/particles/species", p_.species);
-    save_view(out, g + "/particles/id", p_.id);
-    nl_.save(out, g + "/neighbor_list");
-    history_.save(out, g + "/history");
-    save_view(out, g + "/walls/history", wall_history_);
-    save_view(out, g + "/walls/record", wall_record_);
-    std::vector<double> scalars = {time_, static_cast<double>(steps_), particle_volume_};
-    for (int d = 0; d < 3; ++d)
-      scalars.insert(scalars.end(),
-                     {box_.lo[d], box_.len[d], box_.periodic[d] ? 1.0 : 0.0, rate_[d]});
-    out.write(g + "/scalars", scalars);
+    Saved s;
+    s.particles = p_, s.list = nl_.saved(), s.history = history_.saved();
+    s.wall_history = wall_history_, s.wall_record = wall_record_;
+    s.time = time_, s.steps = steps_, s.particle_volume = particle_volume_, s.box = box_;
+    for (int d = 0; d < 3; ++d) s.rate[d] = rate_[d];
+    return s;
   }
-  void load_restart(const H5Reader& in, const std::string& g) {
-    const auto s = in.reals(g + "/scalars");
-    if (s.size() != 15) throw InputError("restart group " + g + " has malformed scalars");
-    Particles<ExecSpace> q = p_;
-    const std::string pg = g + "/particles/";
-    load_view(in, pg + "x", q.x), load_view(in, pg + "v", q.v);
-    load_view(in, pg + "w", q.w), load_view(in, pg + "f", q.f);
-    load_view(in, pg + "torque", q.torque), load_view(in, pg + "radius", q.radius);
-    load_view(in, pg + "mass", q.mass), load_view(in, pg + "inertia", q.inertia);
-    load_view(in, g + "/particles/species", q.species);
-    load_view(in, g + "/particles/id", q.id);
-    if (static_cast<int>(q.x.extent(0)) != p_.n)
-      throw InputError("restart group " + g + " holds another number of particles");
+  // `origin` names where the state came from in the errors.
+  void restore(const Saved& s, const std::string& origin) {
+    const Particles<ExecSpace>& q = s.particles;
+    if (q.n != p_.n) throw InputError(origin + " holds another number of particles");
+    // Spelt out, not a braced list: nvcc's front end rejects some of those here.
+    const auto rows = static_cast<size_t>(q.n);
+    const bool lengths = q.x.extent(0) == rows && q.v.extent(0) == rows && q.w.extent(0) == rows &&
+                         q.f.extent(0) == rows && q.torque.extent(0) == rows &&
+                         q.radius.extent(0) == rows && q.mass.extent(0) == rows &&
+                         q.inertia.extent(0) == rows && q.species.extent(0) == rows &&
+                         q.id.extent(0) == rows;
+    if (!lengths) throw InputError(origin + " holds particle arrays of different lengths");
+    auto same_shape = [](const wall_view& a, const wall_view& b) {
+      return a.extent(0) == b.extent(0) && a.extent(1) == b.extent(1);
+    };
+    if (!same_shape(s.wall_history, wall_history_) || !same_shape(s.wall_record, wall_record_))
+      throw InputError(origin + " holds the walls of another system");
     p_ = q;
-    nl_.load(in, g + "/neighbor_list");
-    history_.load(in, g + "/history", nl_);
-    load_view(in, g + "/walls/history", wall_history_);
-    load_view(in, g + "/walls/record", wall_record_);
-    time_ = s[0], steps_ = static_cast<long>(s[1]), particle_volume_ = s[2];
-    for (int d = 0; d < 3; ++d) {
-      box_.lo[d] = s[3 + 4 * d], box_.len[d] = s[4 + 4 * d];
-      box_.periodic[d] = s[5 + 4 * d] != 0.0, rate_[d] = s[6 + 4 * d];
-    }
+    nl_.restore(s.list, origin + "/neighbor_list");
+    history_.restore(s.history, nl_, origin + "/history");
+    wall_history_ = s.wall_history, wall_record_ = s.wall_record;
+    time_ = s.time, steps_ = s.steps, particle_volume_ = s.particle_volume, box_ = s.box;
+    for (int d = 0; d < 3; ++d) rate_[d] = s.rate[d];
     walls_.update(time_);
     size_pair_buffer(two_pass(), mc_.active());
   }
@@ -709,11 +712,10 @@ class DemSystem {
   long steps_ = 0;
   double particle_volume_ = 0.0;
   double a_min_ = 1e300, a_max_ = 0.0;
-  ContactHistory<ExecSpace, Model::history, true> history_;
+  history_type history_;
   typename ContactHistory<ExecSpace, Model::history>::values_view dummy_history_{"dem::no_history",
                                                                                  1, 1};
   StepProfile* profile_ = nullptr;
-  using wall_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   WallSet<ExecSpace> walls_;
   wall_view wall_history_, wall_record_;
   bool external_ = false;  // walls or gravity: one more pass over the particles per step

@@ -295,7 +295,7 @@ struct KickDriftPass {
 // The pass above over every particle (any backend runs it: tests compare it with the host
 // rows). A team reduction (a block per 128 particles, where Kokkos' range reduction launches
 // at most 256 blocks on a device) was slower on an H200: 182 against 121 us per step at
-// N = 1M (perf/README.md, design note on the GPU).
+// N = 1M (docs/perf_design_notes.md, GPU).
 template <bool Rotations, class ExecSpace>
 double kick_drift_kokkos(const Particles<ExecSpace>& p, const PeriodicBox& box,
                          const typename Particles<ExecSpace>::vec_view& x_ref, double dt,

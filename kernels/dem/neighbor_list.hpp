@@ -24,7 +24,6 @@
 #include "core/run/error.hpp"
 #include "kernels/cpu/force_slabs.hpp"
 #include "kernels/cpu/neighbor_sweep.hpp"
-#include "kernels/dem/view_io.hpp"
 
 namespace granular {
 
@@ -262,59 +261,54 @@ class NeighborList {
   // Reference positions at the last build, moved affinely with the box (strain kernel).
   const typename Particles<ExecSpace>::vec_view& reference() const { return x_ref_; }
 
-  // The list as it stands, for an exact restart: a list rebuilt at restart time would
-  // differ in its entry order and in when the next rebuild falls due, and so in the last
-  // bits of every force sum after it.
-  void save(H5Writer& out, const std::string& g) const {
-    save_view(out, g + "/offsets", offsets_);
-    save_view(out, g + "/neighbors", neighbors_);
-    if (mirror_valid_) save_view(out, g + "/mirror", mirror_);
-    save_view(out, g + "/owned_end", owned_end_);
-    save_view(out, g + "/x_ref", x_ref_);
-    // The slabs fix the summation order of the one-pass force kernel.
-    save_view(out, g + "/cell_order", cell_particles_);
-    save_view(out, g + "/slab_begin", slab_begin_);
-    out.write(g + "/scalars",
-              std::vector<double>{static_cast<double>(num_entries_), static_cast<double>(builds_),
-                                  a_max_, built_len_[0], built_len_[1], built_len_[2]});
+  // The list as it stands, for an exact restart (written and read by
+  // scenarios/common/restart_file.hpp): a list rebuilt at restart time would differ in its
+  // entry order and in when the next rebuild falls due, and so in the last bits of every force
+  // sum after it. The Views are the list's own (saved() copies nothing).
+  struct Saved {
+    int_view offsets, neighbors;
+    int_view mirror;  // empty where the list keeps none
+    int_view owned_end;
+    typename Particles<ExecSpace>::vec_view x_ref;
+    int_view cell_order, slab_begin;  // the slabs fix the one-pass kernel's summation order
+    long num_entries = 0, builds = 0;
+    double a_max = 0.0;
+    double built_len[3] = {0, 0, 0};
+  };
+  Saved saved() const {
+    Saved s;
+    s.offsets = offsets_, s.neighbors = neighbors_;
+    if (mirror_valid_) s.mirror = mirror_;
+    s.owned_end = owned_end_, s.x_ref = x_ref_;
+    s.cell_order = cell_particles_, s.slab_begin = slab_begin_;
+    s.num_entries = num_entries_, s.builds = builds_, s.a_max = a_max_;
+    for (int d = 0; d < 3; ++d) s.built_len[d] = built_len_[d];
+    return s;
   }
-  void load(const H5Reader& in, const std::string& g) {
-    load_view(in, g + "/offsets", offsets_);
-    load_view(in, g + "/neighbors", neighbors_);
-    mirror_valid_ = in.has(g + "/mirror");
-    if (mirror_valid_)
-      load_view(in, g + "/mirror", mirror_);
-    else
-      mirror_ = int_view();
-    load_view(in, g + "/owned_end", owned_end_);
-    load_view(in, g + "/x_ref", x_ref_);
-    if (!in.has(g + "/cell_order") || !in.has(g + "/slab_begin"))
-      throw InputError("restart group " + g +
-                       " has no slab order (written by an older version): it cannot be"
-                       " continued exactly; start the run again");
-    load_view(in, g + "/cell_order", cell_particles_);
-    load_view(in, g + "/slab_begin", slab_begin_);
+  // Takes a saved list as the current one, after checking every index it holds (`origin`
+  // names where it came from in the errors).
+  void restore(const Saved& s, const std::string& origin) {
+    offsets_ = s.offsets, neighbors_ = s.neighbors;
+    mirror_valid_ = s.mirror.extent(0) > 0;
+    mirror_ = mirror_valid_ ? s.mirror : int_view();
+    owned_end_ = s.owned_end, x_ref_ = s.x_ref;
+    cell_particles_ = s.cell_order, slab_begin_ = s.slab_begin;
     num_slabs_ = static_cast<int>(slab_begin_.extent(0)) - 1;
-    const auto s = in.reals(g + "/scalars");
-    if (s.size() != 6) throw InputError("restart group " + g + " has a malformed list");
-    for (double v : s)
-      if (!std::isfinite(v) || v < 0 || v > 1e300)
-        throw InputError("restart group " + g + " has a malformed list (scalars)");
-    num_entries_ = static_cast<int>(std::min(s[0], 2e9)), builds_ = static_cast<long>(s[1]);
-    a_max_ = s[2];
-    for (int d = 0; d < 3; ++d) built_len_[d] = s[3 + d];
-    check_loaded(g);
+    num_entries_ = static_cast<int>(std::min<long>(s.num_entries, 2000000000L));
+    builds_ = s.builds, a_max_ = s.a_max;
+    for (int d = 0; d < 3; ++d) built_len_[d] = s.built_len[d];
+    check_loaded(origin);
     index_pairs(static_cast<int>(owned_end_.extent(0)));  // follows from the rows
     keep_mirror(keep_mirror_);
     pair_index_valid_ = false;
     keep_pair_index(keep_pair_index_);
   }
 
-  // Every index a loaded list holds points inside the arrays it indexes (a damaged
-  // checkpoint is refused here, naming the group, instead of read out of bounds later).
-  void check_loaded(const std::string& g) const {
+  // Every index a restored list holds points inside the arrays it indexes (a damaged
+  // checkpoint is refused here, naming its origin, instead of read out of bounds later).
+  void check_loaded(const std::string& origin) const {
     auto bad = [&](const std::string& what) {
-      throw InputError("restart group " + g + ": " + what +
+      throw InputError(origin + ": " + what +
                        " (a damaged checkpoint: resume from an intact copy, or run again)");
     };
     const auto off = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), offsets_);

@@ -67,7 +67,7 @@ struct NoWallHook {
 // advances its wall histories and records each wall's share for the wall sums. A functor class
 // rather than a lambda: nvcc's wrapper of a host-device lambda inside a function template
 // instantiated in several translation units can be linked with a null copy helper, and the
-// walls' tests then jumped to address 0 on a device (perf/README.md, design note on the GPU).
+// walls' tests then jumped to address 0 on a device (docs/perf_design_notes.md, GPU).
 template <class ExecSpace, class Model, class HistoryView, class RecordView, class Hook>
 struct WallForcePass {
   ParticleViews<ExecSpace> pv;

@@ -17,6 +17,7 @@
 #include "core/dem/particles.hpp"
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
+#include "scenarios/common/identity_order.hpp"
 
 namespace granular {
 
@@ -39,27 +40,20 @@ ConfigState snapshot(const System& sys, const std::vector<double>& density, doub
   const auto& p = sys.particles();
   const int n = p.n;
   auto h = Kokkos::HostSpace();
-  auto x = Kokkos::create_mirror_view_and_copy(h, p.x);
-  auto v = Kokkos::create_mirror_view_and_copy(h, p.v);
-  auto w = Kokkos::create_mirror_view_and_copy(h, p.w);
-  auto r = Kokkos::create_mirror_view_and_copy(h, p.radius);
-  auto m = Kokkos::create_mirror_view_and_copy(h, p.mass);
-  auto s = Kokkos::create_mirror_view_and_copy(h, p.species);
-  auto id = Kokkos::create_mirror_view_and_copy(h, p.id);
+  ParticleRows g = gather_by_identity(p);
   ConfigState c;
   c.particles.resize(n);
-  c.w.assign(3 * n, 0.0);
-  c.mass.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    const int k = id(i);
-    c.particles.x[k] = x(i, 0), c.particles.y[k] = x(i, 1), c.particles.z[k] = x(i, 2);
-    c.particles.vx[k] = v(i, 0), c.particles.vy[k] = v(i, 1), c.particles.vz[k] = v(i, 2);
-    for (int d = 0; d < 3; ++d) c.w[3 * k + d] = w(i, d);
-    c.particles.radius[k] = r(i);
+  for (int k = 0; k < n; ++k) {
+    c.particles.x[k] = g.position[3 * k], c.particles.y[k] = g.position[3 * k + 1];
+    c.particles.z[k] = g.position[3 * k + 2];
+    c.particles.vx[k] = g.velocity[3 * k], c.particles.vy[k] = g.velocity[3 * k + 1];
+    c.particles.vz[k] = g.velocity[3 * k + 2];
+    c.particles.radius[k] = g.radius[k];
     c.particles.density[k] = density.at(k);
-    c.particles.species[k] = s(i);
-    c.mass[k] = m(i);
+    c.particles.species[k] = g.species[k];
   }
+  c.w = std::move(g.angular_velocity);
+  c.mass = std::move(g.mass);
   c.box = sys.box();
   c.phi = sys.particle_volume() / sys.box().volume();
   c.pressure = pressure;
@@ -74,6 +68,7 @@ ConfigState snapshot(const System& sys, const std::vector<double>& density, doub
     auto own = Kokkos::create_mirror_view_and_copy(h, nl.owned_end());
     auto nb = Kokkos::create_mirror_view_and_copy(h, nl.neighbors());
     auto pb = Kokkos::create_mirror_view_and_copy(h, nl.pair_begin());
+    auto id = Kokkos::create_mirror_view_and_copy(h, p.id);
     std::vector<std::pair<std::pair<int, int>, int>> rows;
     for (int i = 0; i < n; ++i)
       for (int k = off(i); k < own(i); ++k) {  // the contacts i owns, in its history rows

@@ -1,7 +1,7 @@
 // Writing DEM states: a particle snapshot group in an HDF5 file (position, velocity,
 // angular velocity, radius, species, id, box) that ParaView opens through an XDMF sidecar,
 // and the same group read back as a starting state. A snapshot holds no contact history
-// (tangential springs): exact restarts use DemSystem::save_restart instead.
+// (tangential springs): exact restarts use write_restart (restart_file.hpp) instead.
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <string>
@@ -12,38 +12,26 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
+#include "scenarios/common/identity_order.hpp"
 
 namespace granular {
 
 template <class ExecSpace>
 void write_state(H5Writer& out, const std::string& group, const Particles<ExecSpace>& p,
                  const PeriodicBox& box, double density) {
-  const int n = p.n;
-  auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
-  auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
-  auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
-  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.w);
-  auto sp = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
-  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
   // Rows in identity order, whatever order the engine keeps in memory for locality: row k
   // is the particle of identity k (the /id column says so explicitly for readers).
-  std::vector<double> pos(3 * n), vel(3 * n), spin(3 * n), rad(n);
-  std::vector<int> ids(n), species(n);
-  for (int i = 0; i < n; ++i) {
-    const int row = id(i);
-    for (int d = 0; d < 3; ++d)
-      pos[3 * row + d] = x(i, d), vel[3 * row + d] = v(i, d), spin[3 * row + d] = w(i, d);
-    rad[row] = r(i);
-    ids[row] = id(i);
-    species[row] = sp(i);
-  }
+  const ParticleRows rows = gather_by_identity(p);
+  const int n = rows.n;
+  std::vector<int> ids(n);
+  for (int k = 0; k < n; ++k) ids[k] = k;
   const hsize_t nn = static_cast<hsize_t>(n);
   // The engine's units: mm, us, ug.
-  write_quantity(out, group + "/position", pos, "mm", {nn, 3});
-  write_quantity(out, group + "/velocity", vel, "mm us-1", {nn, 3});
-  write_quantity(out, group + "/angular_velocity", spin, "rad us-1", {nn, 3});
-  write_quantity(out, group + "/radius", rad, "mm");
-  write_quantity(out, group + "/species", species, "1");
+  write_quantity(out, group + "/position", rows.position, "mm", {nn, 3});
+  write_quantity(out, group + "/velocity", rows.velocity, "mm us-1", {nn, 3});
+  write_quantity(out, group + "/angular_velocity", rows.angular_velocity, "rad us-1", {nn, 3});
+  write_quantity(out, group + "/radius", rows.radius, "mm");
+  write_quantity(out, group + "/species", rows.species, "1");
   write_quantity(out, group + "/id", ids, "1");
   write_quantity(out, group + "/box_lo", std::vector<double>(box.lo, box.lo + 3), "mm");
   write_quantity(out, group + "/box_len", std::vector<double>(box.len, box.len + 3), "mm");

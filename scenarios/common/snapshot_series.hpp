@@ -18,6 +18,7 @@
 #include "core/io/output.hpp"
 #include "core/io/scene_file.hpp"
 #include "scenarios/common/contact_network.hpp"
+#include "scenarios/common/identity_order.hpp"
 #include "scenarios/common/wall_config.hpp"
 
 namespace granular {
@@ -83,23 +84,12 @@ class SnapshotSeries {
     const PeriodicBox& box = sys.box();
     for (int d = 0; d < 3; ++d)
       f.box_lo[d] = box.lo[d], f.box_len[d] = box.len[d], f.periodic[d] = box.periodic[d];
-    auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.x);
-    auto v = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.v);
-    auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.w);
-    auto fo = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.f);
-    auto r = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.radius);
-    auto s = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.species);
-    auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p.id);
-    f.position.resize(3 * f.n), f.velocity.resize(3 * f.n), f.angular_velocity.resize(3 * f.n);
-    f.force.resize(3 * f.n), f.radius.resize(f.n), f.species.resize(f.n), f.id.resize(f.n);
-    for (int i = 0; i < f.n; ++i) {
-      const int row = id(i);
-      for (int d = 0; d < 3; ++d) {
-        f.position[3 * row + d] = x(i, d), f.velocity[3 * row + d] = v(i, d);
-        f.angular_velocity[3 * row + d] = w(i, d), f.force[3 * row + d] = fo(i, d);
-      }
-      f.radius[row] = r(i), f.species[row] = s(i), f.id[row] = row;
-    }
+    ParticleRows rows = gather_by_identity(p);
+    f.position = std::move(rows.position), f.velocity = std::move(rows.velocity);
+    f.angular_velocity = std::move(rows.angular_velocity), f.force = std::move(rows.force);
+    f.radius = std::move(rows.radius), f.species = std::move(rows.species);
+    f.id.resize(f.n);
+    for (int k = 0; k < f.n; ++k) f.id[k] = k;
     const auto& walls = sys.walls();
     f.nwalls = walls.size();
     for (int k = 0; k < f.nwalls; ++k) {

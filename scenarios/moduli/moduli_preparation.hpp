@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/run/progress.hpp"
+#include "scenarios/common/restart_file.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_probing.hpp"
@@ -23,7 +24,7 @@ struct StageCheckpoints {
   std::string state(long k) const {
     return dir + "/" + name + "_stage" + std::to_string(k) + "_state.h5";
   }
-  // The system's exact state after stage k (DemSystem::save_restart).
+  // The system's exact state after stage k (write_restart, scenarios/common/restart_file.hpp).
   std::string restart(long k) const {
     return dir + "/" + name + "_stage" + std::to_string(k) + "_restart.h5";
   }
@@ -171,7 +172,7 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
                                          k < relaxed_stage ? gas_model : model, s.params));
       const H5Reader restart(ck.restart(k));
       try {
-        sys->load_restart(restart, "/restart");
+        load_restart(restart, "/restart", *sys);
       } catch (const InputError& e) {
         throw InputError("--resume: " + ck.restart(k) + ": " + e.what() + "; run without --resume");
       }
@@ -214,7 +215,7 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
     write_config(ck.state(k), snapshot(*sys, host.density, m.pressure));
     {
       H5Writer r(ck.restart(k));
-      sys->save_restart(r, "/restart");
+      write_restart(r, "/restart", *sys);
       r.write("/protocol/rate_and_direction", std::vector<double>{rate_now, direction_now});
       r.commit();
     }

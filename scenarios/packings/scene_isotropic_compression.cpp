@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -17,6 +18,7 @@
 #include "scenarios/common/charts.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/restart_file.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -192,19 +194,25 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   if (!begin_outputs(opts)) return;
   const double d_mean = 0.5 * (gas.diameter_min + gas.diameter_max);
 
+  // A checkpoint holds one restart group (the system's exact state) and the series so far;
+  // the resumed run's system is made from the saved particles and then takes that state.
   PeriodicBox box;
   HostParticles host;
   Series series;
-  double t0 = 0;
-  long step0 = 0;
+  std::optional<System::Saved> saved;
   if (opts.resume) {
     H5Reader in(checkpoint);
-    double density = 0;
-    host = read_state(in, "/state", box, density);
+    if (!in.has("/restart"))
+      throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
+    try {
+      saved = read_restart<System>(in, "/restart");
+      host = host_by_identity(saved->particles, gas.density);
+    } catch (const InputError& e) {
+      throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
+    }
+    box = saved->box;
     series.read(in, "/series");
-    t0 = in.attribute("/state", "time");
-    step0 = static_cast<long>(in.attribute("/state", "step"));
-    std::cerr << "resuming from " << checkpoint << " at step " << step0 << "\n";
+    std::cerr << "resuming from " << checkpoint << " at step " << saved->steps << "\n";
   } else if (from.empty()) {
     host = random_gas(gas, box);
   } else {
@@ -212,17 +220,15 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   }
 
   System sys(Particles<Exec>::from_host(host), box, model, params);
-  sys.set_clock(t0, step0);
-  if (opts.resume) {  // the exact state the interrupted run had at its checkpoint
-    H5Reader in(checkpoint);
-    if (!in.has("/restart"))
-      throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
+  if (saved) {
     try {
-      sys.load_restart(in, "/restart");
+      sys.restore(*saved, restart_origin("/restart"));
     } catch (const InputError& e) {
       throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
     }
+    saved.reset();
   }
+  const long step0 = sys.steps();  // where this run starts: 0, or the checkpoint's step
 
   // Per-axis rate for the volumetric rate: V(t) = V0 exp(-rate t) in the limit dt -> 0.
   const double axis_rate = -rate / 3.0;
@@ -241,10 +247,7 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   };
   auto save_checkpoint = [&]() {
     H5Writer out(checkpoint);
-    write_state(out, "/state", sys.particles(), sys.box(), gas.density);
-    sys.save_restart(out, "/restart");
-    out.attribute("/state", "time", sys.time());
-    out.attribute("/state", "step", static_cast<double>(sys.steps()));
+    write_restart(out, "/restart", sys);
     series.write(out, "/series");
     out.commit();
   };

@@ -4,7 +4,7 @@
     real_run_fuzz.py GRANULAR [--mutants N] [--seed S] [--scenes a,b] [--timeout T]
                      [--keep DIR] [--list] [--verbose] [--strict-nan]
 
-tests/test_scene_file_fuzz.cpp mutates every shipped scene file and only *checks* it; this
+tests/core/io/test_scene_file_fuzz.cpp mutates every shipped scene file and only *checks* it; this
 script *runs* the mutants, so that what the checks let through meets the drivers, the
 kernels and the output writers. Each shipped scene file is first shrunk to a run of a second
 or two (SHRINK below); a mutant is a shrunk scene with one or two mutations: a hostile

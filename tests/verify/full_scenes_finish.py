@@ -15,6 +15,7 @@ The `long` label of ctest runs it (hours: the moduli studies take tens of minute
 import argparse
 import json
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -64,6 +65,20 @@ def run(granular, name, threads, work):
     return seconds, status
 
 
+def record(path, name, threads, seconds, status):
+    if not path.exists():
+        path.write_text(
+            "# Wall times of the full scenes\n\n"
+            "Appended by `tests/verify/full_scenes_finish.py --record` (`ctest -L long`): each\n"
+            "run of a full scene to its end on the current code, on the machine named in the\n"
+            "run's own record.\n\n"
+            "| date (UTC) | commit | scene | threads | minutes | status |\n"
+            "|---|---|---|---|---|---|\n")
+    day = time.strftime("%Y-%m-%d", time.gmtime())
+    with path.open("a") as f:
+        f.write(f"| {day} | {commit()} | {name} | {threads} | {seconds / 60:.1f} | {status} |\n")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("granular")
@@ -79,29 +94,17 @@ def main():
         return
     work = Path(args.work) if args.work else Path(tempfile.mkdtemp(prefix="granular_full_"))
     work.mkdir(parents=True, exist_ok=True)
+    # A runner stopped with SIGTERM stops its scene too (subprocess.run kills the child on
+    # the exception), instead of leaving it running for hours without a parent.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     failed = 0
-    rows = []
     print(f"{'scene':34s} {'threads':>7s} {'minutes':>8s}  status", flush=True)
     for name in names:
         seconds, status = run(args.granular, name, args.threads, work)
         failed += status != "complete"
         print(f"{name:34s} {args.threads:7d} {seconds / 60:8.1f}  {status}", flush=True)
-        rows.append((name, seconds, status))
-    if args.record:
-        path = Path(args.record)
-        if not path.exists():
-            path.write_text(
-                "# Wall times of the full scenes\n\n"
-                "Appended by `tests/verify/full_scenes_finish.py --record` (`ctest -L long`): each\n"
-                "run of a full scene to its end on the current code, on the machine named in the\n"
-                "run's own record.\n\n"
-                "| date (UTC) | commit | scene | threads | minutes | status |\n"
-                "|---|---|---|---|---|---|\n")
-        day, rev = time.strftime("%Y-%m-%d", time.gmtime()), commit()
-        with path.open("a") as f:
-            for name, seconds, status in rows:
-                f.write(f"| {day} | {rev} | {name} | {args.threads} | {seconds / 60:.1f} | "
-                        f"{status} |\n")
+        if args.record:  # row by row: a study of hours is kept even if a later one is stopped
+            record(Path(args.record), name, args.threads, seconds, status)
     if not args.work:
         shutil.rmtree(work, ignore_errors=True)
     sys.exit(1 if failed else 0)

@@ -1,0 +1,269 @@
+// Batched contact evaluation (kernels/cpu/contact_batch.hpp) against the scalar law: lane by
+// lane on hand-made contacts that take every branch (sticking and sliding springs, an
+// empty spring, a spring far out of the tangent plane, infinite friction at zero normal
+// force, a tensile normal force, no tangential stiffness); and against the contact-by-
+// contact rows of the host one-pass kernel: bitwise the same positions, velocities, spins,
+// forces, torques and springs after a compression and a shear with rebuilds and two species
+// of different stiffness and friction, and for a packing whose crowded particle owns more
+// contacts than a batch holds (its row goes scalar). Skipped where the processor has no AVX.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "kernels/contact/contact_model.hpp"
+#include "kernels/cpu/contact_batch.hpp"
+#include "kernels/dem/dem_system.hpp"
+#include "scenarios/common/packing.hpp"
+#include "tests/exec_spaces.hpp"
+#include "tests/test_support.hpp"
+
+using namespace granular;
+
+namespace {
+
+using Friction = ContactModel<LinearNormal, CoulombTangential>;
+
+// Species 0 and 1 with different normal stiffness, damping and friction (mixed pairs in
+// between), so the batch's parameter gather is exercised.
+LinearNormal two_species_normal() {
+  LinearNormal n = LinearNormal::uniform(1e5, 1000);
+  n.table.p[1][1] = {3e5, 1500};
+  n.table.p[0][1] = n.table.p[1][0] = {1.5e5, 1200};
+  return n;
+}
+Friction two_species_friction() {
+  CoulombTangential t = CoulombTangential::uniform(8e4, 200, 0.5, 0.4);
+  t.table.p[1][1] = {2.4e5, 300, 0.2, 0.2, CoulombTangential::Constant};
+  t.table.p[0][1] = t.table.p[1][0] = {1.2e5, 250, 0.3, 0.25, CoulombTangential::Constant};
+  return {two_species_normal(), t, {}};
+}
+
+#if GRANULAR_CONTACT_BATCH
+HostParticles two_species_gas(PeriodicBox& box, int count) {
+  GasSpec g;
+  g.count = count, g.diameter_min = 1, g.diameter_max = 1.6, g.density = 2000, g.phi = 0.35;
+  g.speed = 0.01, g.seed = 11;
+  HostParticles h = random_gas(g, box);
+  for (int i = 0; i < h.size(); i += 3) h.species[i] = 1;
+  return h;
+}
+
+template <class Exec, class V>
+std::vector<double> host_copy(const V& v) {
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+  return std::vector<double>(h.data(), h.data() + h.size());
+}
+
+using granular::testing::bitwise_equal;
+
+template <class Exec, class Model>
+void expect_bitwise_equal(const DemSystem<Exec, Model>& a, const DemSystem<Exec, Model>& b) {
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().x), host_copy<Exec>(b.particles().x)));
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().v), host_copy<Exec>(b.particles().v)));
+  EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().f), host_copy<Exec>(b.particles().f)));
+  if constexpr (Model::rotations) {
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().w), host_copy<Exec>(b.particles().w)));
+    EXPECT_TRUE(bitwise_equal(host_copy<Exec>(a.particles().torque),
+                              host_copy<Exec>(b.particles().torque)));
+    EXPECT_TRUE(
+        bitwise_equal(host_copy<Exec>(a.history_view()), host_copy<Exec>(b.history_view())));
+  }
+}
+
+// Compresses the same gas twice, batched and contact by contact, and compares bitwise.
+template <class Exec, class Model>
+void compare_compression(const Model& model) {
+  PeriodicBox box;
+  const HostParticles h = two_species_gas(box, 2500);
+  DemParams prm;
+  prm.dt = 0.003, prm.skin = 0.1, prm.damping.translational = 100;
+  prm.damping.rotational = 20;
+  DemParams scalar = prm;
+  scalar.batched_contacts = false;
+  DemSystem<Exec, Model> a(Particles<Exec>::from_host(h), box, model, prm);
+  DemSystem<Exec, Model> b(Particles<Exec>::from_host(h), box, model, scalar);
+  a.set_strain_rate(-3e-2, -3e-2, -3e-2);  // to phi ~ 0.65: a loaded packing
+  b.set_strain_rate(-3e-2, -3e-2, -3e-2);
+  a.step(2200);
+  b.step(2200);
+  const Measurements m = a.measure();
+  ASSERT_GT(m.contacts, a.particles().n) << "too few contacts for the comparison to bite";
+  ASSERT_GT(a.neighbor_list().builds(), 2) << "the springs must survive rebuilds";
+  expect_bitwise_equal(a, b);
+  // Shearing the loaded packing makes contacts slide (the Coulomb branch of the lanes).
+  a.set_strain_rate(2e-1, -2e-1, 0);
+  b.set_strain_rate(2e-1, -2e-1, 0);
+  a.step(400);
+  b.step(400);
+  expect_bitwise_equal(a, b);
+}
+#endif
+
+}  // namespace
+
+#if GRANULAR_CONTACT_BATCH  // (the batch exists only in GNU x86-64 host builds)
+template <class T>
+class ContactBatchTest : public ::testing::Test {};
+TYPED_TEST_SUITE(ContactBatchTest, granular::testing::ExecSpaces);
+
+TYPED_TEST(ContactBatchTest, BatchedFrictionalContactsGiveBitwiseTheContactByContactTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<Friction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    compare_compression<Exec>(two_species_friction());
+  }
+}
+
+// One parameter set for every pair: the batch broadcasts it instead of gathering it.
+TYPED_TEST(ContactBatchTest, BroadcastParametersOfOneSpeciesGiveBitwiseTheScalarTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<Friction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    const Friction one{
+        LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.4), {}};
+    ASSERT_TRUE(ContactBatchLaw<Friction>::uniform(one));
+    ASSERT_FALSE(ContactBatchLaw<Friction>::uniform(two_species_friction()));
+    Friction signed_zero = one;  // equal as numbers, not as bits: not broadcast
+    for (auto& row : signed_zero.normal.table.p)
+      for (auto& pair : row) pair.gn = 0.0;
+    ASSERT_TRUE(ContactBatchLaw<Friction>::uniform(signed_zero));
+    signed_zero.normal.table.p[1][1].gn = -0.0;
+    EXPECT_FALSE(ContactBatchLaw<Friction>::uniform(signed_zero));
+    compare_compression<Exec>(one);
+  }
+}
+
+// A large sphere among small ones owns more neighbour entries than a batch holds: its row
+// is evaluated contact by contact between batches, in its place in the order.
+TYPED_TEST(ContactBatchTest, CrowdedRowBeyondTheBatchCapacityKeepsBitwiseTheSameForces) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<Friction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    PeriodicBox box;
+    const double L = 22.0, c = L / 2;
+    for (int d = 0; d < 3; ++d) box.lo[d] = 0.0, box.len[d] = L;
+    HostParticles h;
+    std::vector<std::array<double, 4>> balls = {{c, c, c, 5.0}};  // identity 0: owns its row
+    for (int a = 0; a < 22; ++a)
+      for (int b = 0; b < 22; ++b)
+        for (int k = 0; k < 22; k += 2) {
+          const double x = a + 0.5, y = b + 0.5, z = k + 0.5 + 0.5 * (a % 2);
+          const double d2 = (x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c);
+          if (d2 < 5.45 * 5.45) continue;
+          balls.push_back({x, y, z, 0.47 + 0.005 * (balls.size() % 5)});
+        }
+    h.resize(static_cast<int>(balls.size()));
+    for (size_t i = 0; i < balls.size(); ++i) {
+      h.x[i] = balls[i][0], h.y[i] = balls[i][1], h.z[i] = balls[i][2];
+      h.radius[i] = balls[i][3], h.density[i] = 2000;
+      h.vx[i] = 0.05 * std::sin(1.0 + i), h.vy[i] = 0.05 * std::cos(2.0 + i);
+      h.vz[i] = 0.05 * std::sin(3.0 * i);
+    }
+    DemParams prm;
+    prm.dt = 0.002, prm.skin = 0.3, prm.damping.translational = 10;
+    DemParams scalar = prm;
+    scalar.batched_contacts = false;
+    const Friction model = two_species_friction();
+    DemSystem<Exec, Friction> a(Particles<Exec>::from_host(h), box, model, prm);
+    DemSystem<Exec, Friction> b(Particles<Exec>::from_host(h), box, model, scalar);
+    a.set_strain_rate(-1e-2, -1e-2, -1e-2);
+    b.set_strain_rate(-1e-2, -1e-2, -1e-2);
+    a.step(1500);
+    b.step(1500);
+    // The crowded particle's row (wherever the sort put it) must exceed the batch.
+    auto off =
+        Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), a.neighbor_list().offsets());
+    auto own =
+        Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), a.neighbor_list().owned_end());
+    int longest = 0;
+    for (int i = 0; i < a.particles().n; ++i) longest = std::max(longest, own(i) - off(i));
+    ASSERT_GT(longest, ContactBatch::kCap) << "no row beyond the batch: the fallback is untested";
+    EXPECT_GT(a.measure().contacts, 200);
+    expect_bitwise_equal(a, b);
+  }
+}
+
+TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
+  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+  const Friction model = two_species_friction();
+  const double inf = std::numeric_limits<double>::infinity();
+  const double dt = 0.003;
+  ContactBatch cb;
+  std::vector<std::array<double, 12>> expected;
+  int slid = 0;
+  for (int c = 0; c < 37; ++c) {  // not a multiple of the lane count: the padding is used
+    const double u = 0.37 * c;
+    Body bi{}, bj{};
+    bi.a = 0.5 + 0.01 * c, bj.a = 0.7 - 0.005 * c;
+    bi.s = c % 2, bj.s = (c / 2) % 2;
+    bi.m = 1.0, bj.m = 2.0;
+    // Centre distance just under contact: overlaps of 1-5 % of the radii.
+    const double e[3] = {std::cos(u), std::sin(u), 0.5 * std::sin(2 * u)};
+    const double len = (bi.a + bj.a) * (0.97 + 0.02 * std::sin(3 * u)) /
+                       std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    const double rx = len * e[0], ry = len * e[1], rz = len * e[2];
+    const double r2 = rx * rx + ry * ry + rz * rz;
+    for (int d = 0; d < 3; ++d) {
+      bi.v[d] = 0.3 * std::sin(u + d), bj.v[d] = -0.2 * std::cos(2 * u + d);
+      bi.w[d] = 0.5 * std::cos(3 * u + d), bj.w[d] = 0.1 * std::sin(u - d);
+    }
+    const double rate[3] = {0.01, -0.02, 0.005};
+    PairState s;
+    pair_geometry(bi, bj, rx, ry, rz, r2, rate, true, s);
+    // Springs: mostly small (sticking), some large (sliding), one empty, some far out of
+    // the plane (the exact restoring factor instead of its series).
+    std::array<double, 3> h = {1e-4 * std::sin(5 * u), 1e-4 * std::cos(7 * u), 2e-5 * c};
+    if (c % 5 == 1) h = {0.3 * std::sin(u), -0.2, 0.1};
+    if (c % 7 == 3) h = {s.n[0] * 1e-3 + 1e-4, s.n[1] * 1e-3, s.n[2] * 1e-3};
+    if (c == 4) h = {0, 0, 0};
+    CoulombTangential::Params pt = model.tangential.table(bi.s, bj.s);
+    if (c == 6) pt.kt = 0.0;              // no tangential stiffness
+    if (c == 8) pt.mu_s = pt.mu_d = inf;  // never slides
+    LinearNormal::Params pn = model.normal.table(bi.s, bj.s);
+    if (c == 8 || c == 9) pn.kn = 0.0, pn.gn = 0.0;  // zero normal force
+    if (c == 10) pn.kn = -1e3;                       // a tensile normal force
+    cb.push(bi, bj, c, c, rx, ry, rz, rate, pn, pt, h.data());
+    // The scalar law with the same per-pair parameters.
+    Friction one = model;
+    one.normal.table.p[bi.s][bj.s] = pn;
+    one.tangential.table.p[bi.s][bj.s] = pt;
+    std::array<double, 3> probe = h;
+    double ft[3];
+    slid += one.tangential.force(s, one.normal.force(s, nullptr), dt, probe.data(), ft);
+    PairForce out;
+    one.evaluate(s, dt, h.data(), out);
+    expected.push_back({out.f[0], out.f[1], out.f[2], out.q[0], out.q[1], out.q[2], out.qj[0],
+                        out.qj[1], out.qj[2], h[0], h[1], h[2]});
+  }
+  cb.evaluate(dt);
+  ASSERT_GE(slid, 5) << "too few sliding lanes";
+  ASSERT_LE(slid, cb.n - 10) << "too few sticking lanes";
+  for (int c = 0; c < cb.n; ++c) {
+    const double got[12] = {cb.f0[c], cb.f1[c], cb.f2[c], cb.q0[c], cb.q1[c], cb.q2[c],
+                            cb.p0[c], cb.p1[c], cb.p2[c], cb.h0[c], cb.h1[c], cb.h2[c]};
+    for (int e = 0; e < 12; ++e)
+      EXPECT_EQ(std::memcmp(&got[e], &expected[c][e], sizeof(double)), 0)
+          << "contact " << c << " value " << e << ": " << got[e] << " vs " << expected[c][e];
+  }
+}
+#endif
+
+TEST(ContactBatchLawTest, MindlinSpringsAreLeftToTheContactByContactRows) {
+  Friction m = two_species_friction();
+  EXPECT_TRUE(ContactBatchLaw<Friction>::usable(m));
+  m.tangential.table.p[0][1].law = CoulombTangential::MindlinPairDiameter;
+  EXPECT_FALSE(ContactBatchLaw<Friction>::usable(m));
+  EXPECT_FALSE((ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>>::available));
+  EXPECT_FALSE((ContactBatchLaw<ContactModel<LinearNormal>>::available))
+      << "the frictionless law measured slower batched";
+}
