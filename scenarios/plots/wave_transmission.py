@@ -11,8 +11,10 @@ from chartkit import plt, save
 h5, outdir = sys.argv[1], sys.argv[2]
 with h5py.File(h5, "r") as f:
     n = int(f.attrs["states"])
+    # A state the servo did not converge to has no group (summary.json: unconverged_states).
+    analysed = [k for k in range(n) if f"pressure_{k}" in f]
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    for k in range(n):
+    for k in analysed:
         g = f[f"pressure_{k}"]
         lab = f"{g.attrs['sigma_xx']:.3g} MPa"
         r = g["receiver"]
@@ -35,9 +37,10 @@ with h5py.File(h5, "r") as f:
         e = sm["energy"][:]
         axes[2].semilogy(sm["frequency"][:] * 1e3, e / e.max(), lw=0.8, ls="--",
                          color=line.get_color())
-    s0 = f["pressure_0/source"]
-    axes[0].plot(s0["time"][:], s0["amplitude"][:] / np.max(s0["amplitude"][:]), "k--", lw=0.8,
-                 label="source velocity")
+    if analysed:
+        s0 = f[f"pressure_{analysed[0]}/source"]
+        axes[0].plot(s0["time"][:], s0["amplitude"][:] / np.max(s0["amplitude"][:]), "k--",
+                     lw=0.8, label="source velocity")
     axes[0].set_xlabel("time (us)")
     axes[0].set_ylabel("receiver wall stress (normalised)")
     axes[0].legend(fontsize=7)
@@ -57,7 +60,7 @@ with h5py.File(h5, "r") as f:
     axes[0].set_xlabel("wall stress sigma_xx (MPa)")
     axes[0].set_ylabel("M (MPa)")
     axes[0].legend(fontsize=7)
-    for k in range(n):
+    for k in analysed:
         g = f[f"pressure_{k}"]
         if "ratio" in g:
             fr, y = g["ratio/frequency"][:], g["ratio/log_ratio"][:]

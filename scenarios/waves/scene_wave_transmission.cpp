@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -57,6 +58,9 @@ struct Prepared {
   double xs = 0, pressure = 0, gap = 0, phi = 0, rho_bulk = 0, rho_solid = 0;
   double lateral_ratio = 0, z = 0, mean_overlap = 0, max_overlap = 0;
   long steps = 0;
+  double target = 0;       // the servo's target sigma_xx
+  bool converged = true;   // false: the servo ran out of preparation.max_time
+  std::string servo_note;  // then: its last held states
 };
 
 HostParticles gas(const WaveSetup& w, PeriodicBox& box) {
@@ -148,20 +152,29 @@ class WaveServo {
     set_speed(0.0);
   }
 
-  // Brings the packing to `target` and leaves the wall held there.
-  void reach(double target, const RunOptions& opts) {
+  // Brings the packing to `target` and leaves the wall held there. Returns false where the
+  // servo runs out of preparation.max_time (failure() then says how it ended); the wall is
+  // held where it stopped.
+  bool reach(double target, const RunOptions& opts) {
     Progress progress("servo to " + std::to_string(target) + " MPa", max_steps_, opts.progress);
     progress_ = &progress;
     target_ = target;
     steps_ = 0;
     sigma_ = wall_stress(sys_.wall_loads(), area_);
     held_.clear();
-    compress_gas();
-    if (!held_states()) piston();
+    failure_.clear();
+    try {
+      compress_gas();
+      if (!held_states()) piston();
+    } catch (const OutOfTime&) {
+      failure_ = out_of_time_message();
+    }
     set_speed(0.0);
     progress.finish();
     progress_ = nullptr;
+    return failure_.empty();
   }
+  const std::string& failure() const { return failure_; }
 
   DemSystem<Exec, Model>& system() { return sys_; }
   double wall_position() const { return xs_; }
@@ -189,20 +202,21 @@ class WaveServo {
     sys_.check_health(sys_.measure());
     sigma_ = wall_stress(sys_.wall_loads(), area_);
     progress_->update(steps_);
-    if (steps_ > max_steps_) out_of_time();
+    if (steps_ > max_steps_) throw OutOfTime{};
   }
 
+  struct OutOfTime {};  // thrown by advance(), caught by reach()
   // The last held states say whether the servo oscillated, crept or never loaded.
-  [[noreturn]] void out_of_time() const {
+  std::string out_of_time_message() const {
     std::ostringstream last;
     last.precision(6);
     const size_t from = held_.size() > 8 ? held_.size() - 8 : 0;
     for (size_t k = from; k < held_.size(); ++k)
       last << (k > from ? ", " : "") << "gap " << held_[k].first << " mm: " << held_[k].second;
-    throw PhysicsError("the servo did not reach sigma_xx = " + std::to_string(target_) +
-                       " MPa within preparation.max_time (now " + std::to_string(sigma_) +
-                       " MPa after " + std::to_string(held_.size()) + " held states; the last: " +
-                       last.str() + "): raise it, or preparation.wall_speed");
+    return "the servo did not reach sigma_xx = " + std::to_string(target_) +
+           " MPa within preparation.max_time (now " + std::to_string(sigma_) + " MPa after " +
+           std::to_string(held_.size()) + " held states; the last: " + last.str() +
+           "): raise it, or preparation.wall_speed";
   }
 
   // A gas has no stiffness to aim with, and its wall force is a train of collisions: the
@@ -288,6 +302,7 @@ class WaveServo {
   long steps_ = 0;
   std::vector<std::pair<double, double>> held_;  // (gap, sigma_xx) of each held state
   Progress* progress_ = nullptr;
+  std::string failure_;
 };
 
 // The state the servo holds at its target, with what the wave analysis needs of it.
@@ -325,8 +340,16 @@ std::vector<Prepared> prepare(const Model& model, const WaveSetup& w,
   WaveServo<Model> servo(model, w, h, box);
   std::vector<Prepared> out;
   for (double target : w.pressures) {
-    servo.reach(target, opts);
+    const bool converged = servo.reach(target, opts);
+    if (!converged && w.stop_unconverged) throw PhysicsError(servo.failure());
     out.push_back(prepared_state(servo, density, h, box));
+    out.back().target = target, out.back().converged = converged;
+    if (!converged) {
+      out.back().servo_note = servo.failure();
+      std::cerr << servo.failure() << "; this state is left out of the analysis (listed in "
+                << "summary.json's unconverged_states; preparation.unconverged = \"stop\" "
+                << "stops the run instead)\n";
+    }
   }
   return out;
 }
@@ -519,6 +542,211 @@ Json numerics_entry(const WaveRecord& r, const WaveSetup& w, const Prepared& p) 
 
 }  // namespace
 
+namespace {
+
+// /table of results.h5: a row per state (NaN where a state was not analysed).
+struct StateTable {
+  std::vector<double> p, phi, rho, vp, mwave, mprobe, q, qerr, fdom;
+  void add(const Prepared& s, double vp_peak, double m_wave, double m_probe, double q_slabs,
+           double q_error, double f_mirrored) {
+    p.push_back(s.pressure), phi.push_back(s.phi), rho.push_back(s.rho_bulk);
+    vp.push_back(vp_peak), mwave.push_back(m_wave), mprobe.push_back(m_probe);
+    q.push_back(q_slabs), qerr.push_back(q_error), fdom.push_back(f_mirrored);
+  }
+  void write(H5Writer& h5) const {
+    write_quantity(h5, "/table/sigma_xx", p, "MPa");
+    write_quantity(h5, "/table/phi", phi, "1");
+    // rho_bulk: the particles' mass over the volume between the walls
+    write_quantity(h5, "/table/rho_bulk", rho, "ug mm-3");
+    write_quantity(h5, "/table/V_p_first_peak", vp, "mm us-1");
+    write_quantity(h5, "/table/M_wave", mwave, "MPa");  // rho_bulk V_p^2
+    write_quantity(h5, "/table/M_probe", mprobe, "MPa");
+    write_quantity(h5, "/table/Q", q, "1");
+    write_quantity(h5, "/table/Q_error", qerr, "1");
+    write_quantity(h5, "/table/receiver_dominant_frequency_mirrored", fdom, "us-1");
+  }
+};
+
+// A state the servo did not converge to: its summary row and its unconverged_states entry.
+Json unconverged_row(const Prepared& p) {
+  Json row = Json::object();
+  row["servo_converged"] = false;
+  row["target_sigma_xx"] = p.target;
+  row["sigma_xx"] = p.pressure;
+  row["gap"] = p.gap;
+  row["phi"] = p.phi;
+  row["z"] = p.z;
+  row["preparation_steps"] = p.steps;
+  return row;
+}
+Json unconverged_entry(size_t k, const Prepared& p) {
+  Json e = Json::object();
+  e["state"] = static_cast<double>(k);
+  e["target_sigma_xx"] = p.target;
+  e["sigma_xx"] = p.pressure;
+  e["servo"] = p.servo_note;
+  return e;
+}
+
+// The pulse at each amplitude (the first is the reference, recorded as snapshots where the
+// scene asks): the reference run and its picks, and the amplitude check.
+struct Pulses {
+  Json amplitudes = Json::array();
+  WaveRecord ref;
+  Picks pin, pout;
+  double vp_peak = NAN;
+};
+Pulses run_pulses(const WaveSetup& w, const Prepared& p, const PeriodicBox& box, size_t k,
+                  const RunOptions& opts, long snapshot_every, bool with_contacts) {
+  Pulses out;
+  Json& amps = out.amplitudes;
+  WaveRecord& ref = out.ref;
+  Picks &pin = out.pin, &pout = out.pout;
+  double& vp_peak = out.vp_peak;
+  for (size_t a = 0; a < w.amplitude_factors.size(); ++a) {
+    const double amp = w.velocity * w.amplitude_factors[a];
+    WaveRecord r;
+    SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
+                             a == 0 ? snapshot_every : 0);
+    snapshots.record_contacts(with_contacts);
+    with_material_model(w.mats,
+                        [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
+    const Picks pi = pick_travel_times(r.source, w.signals.picker);
+    const Picks po = pick_travel_times(r.force, w.signals.picker);
+    Json e = Json::object();
+    e["amplitude"] = amp;
+    e["travel"] = travel_times(pi, po, p.gap, p.rho_bulk, a == 0 ? &vp_peak : nullptr);
+    e["wall_seconds"] = r.seconds;
+    if (a == 0) {
+      ref = r, pin = pi, pout = po;
+    } else {  // normalized receiver signals against the reference amplitude's
+      double num = 0, den = 0;
+      const double f = w.amplitude_factors[a];
+      for (int i = 0; i < r.force.size() && i < ref.force.size(); ++i) {
+        const double x = (r.force.a[i] - po.baseline) / f, y = ref.force.a[i] - pout.baseline;
+        num = std::max(num, std::abs(x - y)), den = std::max(den, std::abs(y));
+      }
+      e["normalized_signal_max_difference"] = num / den;
+      const double dtp = po.first_peak - pout.first_peak;
+      e["first_peak_time_difference"] = std::isfinite(dtp) ? Json(dtp) : Json();
+    }
+    amps.push(e);
+  }
+  return out;
+}
+
+// The reference run's source and receiver signals and spectra (the mirrored one's dominant
+// frequency returned) into `row` and the state's group `g`.
+double write_wall_signals(H5Writer& h5, const std::string& g, const WaveSetup& w, const Prepared& p,
+                          const Pulses& r, Json& row) {
+  const WaveRecord& ref = r.ref;
+  const Picks &pin = r.pin, &pout = r.pout;
+  double fdom_mirrored = NAN;
+  row["travel"] = travel_times(pin, pout, p.gap, p.rho_bulk, nullptr);
+  write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals),
+               kVelocityTrace);
+  const Spectrum sf = safe_spectrum(ref.force, pout, w.signals);
+  write_signal(h5, g + "/receiver", ref.force, pout, sf, kStressTrace);
+  row["receiver_spectrum"] = spectrum_json(sf);
+  {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
+     // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
+     // dominant frequency of its own: the receiver's rise time as a frequency.
+    SignalSettings mirrored = w.signals;
+    mirrored.spectrum.window = EventWindow::Mirrored;
+    const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);
+    row["receiver_spectrum_mirrored"] = spectrum_json(sm);
+    fdom_mirrored = sm.dominant_frequency;
+    write_quantity(h5, g + "/receiver_mirrored/frequency", sm.f, frequency_unit(kStressTrace));
+    write_quantity(h5, g + "/receiver_mirrored/energy", sm.energy, energy_unit(kStressTrace));
+  }
+  return fdom_mirrored;
+}
+
+// Slabs: travel times, spectra, Q between the first and the last, into `row` and `g`.
+void analyse_slabs(H5Writer& h5, const std::string& g, const WaveSetup& w, const Prepared& p,
+                   const Pulses& r, Json& row, double& q, double& qerr) {
+  const WaveRecord& ref = r.ref;
+  const Picks& pin = r.pin;
+  std::vector<Picks> ps;
+  Json slabs = Json::array();
+  for (size_t s = 0; s < ref.slabs.size(); ++s) {
+    ps.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
+    const Spectrum ss = safe_spectrum(ref.slabs[s], ps[s], w.signals);
+    write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss, kVelocityTrace);
+    h5.attribute(g + "/slab_" + std::to_string(s), "distance", ref.slab_x[s]);
+    Json sj = Json::object();
+    sj["distance"] = ref.slab_x[s];
+    sj["picks"] = picks_json(ps[s]);
+    sj["travel"] = travel_times(pin, ps[s], ref.slab_x[s], p.rho_bulk, nullptr);
+    sj["spectrum"] = spectrum_json(ss);
+    slabs.push(sj);
+  }
+  row["slabs"] = slabs;
+  if (ref.slabs.size() >= 2) {
+    const size_t last = ref.slabs.size() - 1;
+    // Velocity between the slabs (no wall in the path) by each picker
+    Json between = Json::object();
+    for (const char* pk : kPickers) {
+      const double dtp = picked_time(ps[last], pk) - picked_time(ps[0], pk);
+      const double dx = ref.slab_x[last] - ref.slab_x[0];
+      between[pk] = std::isfinite(dtp) && dtp > 0 ? Json(dx / dtp) : Json();
+    }
+    row["V_p_between_slabs"] = between;
+    try {
+      const SpectralRatioFit f =
+          analyse_ratio(ref.slabs[0], ps[0], ref.slabs[last], ps[last], w.signals);
+      row["spectral_ratio"] = ratio_json(f);
+      write_quantity(h5, g + "/ratio/frequency", f.f, frequency_unit(kVelocityTrace));
+      write_quantity(h5, g + "/ratio/log_ratio", f.log_ratio, "1");  // ln(A2/A1)
+      h5.attribute(g + "/ratio", "slope", f.slope);
+      h5.attribute(g + "/ratio", "intercept", f.intercept);
+      q = f.q, qerr = f.q_error;
+    } catch (const std::exception& e) {
+      row["spectral_ratio"] = std::string("failed: ") + e.what();
+    }
+  }
+}
+
+// Numerics: the reference pulse against smaller time steps and other contact damping.
+void numerics_checks(const WaveSetup& w, const Prepared& p, const PeriodicBox& box,
+                     const WaveRecord& ref, Json& row) {
+  // Numerics: travel time and Q against the time step, and against contact damping (how
+  // much of Q is the contacts' dissipation rather than scattering).
+  Json dts = Json::array();
+  for (double fct : w.dt_check) {
+    WaveRecord r;
+    with_material_model(w.mats,
+                        [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt * fct); });
+    Json e = numerics_entry(r, w, p);
+    e["dt"] = w.dt * fct;
+    dts.push(e);
+  }
+  row["dt_check"] = dts;
+  Json rest = Json::array();
+  for (double e_r : w.restitution_check) {
+    MaterialSet mats = w.mats;
+    for (auto& mat : mats.materials) mat.restitution = e_r;
+    WaveRecord r;
+    with_material_model(mats, [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt); });
+    Json e = numerics_entry(r, w, p);
+    e["restitution"] = e_r;
+    rest.push(e);
+  }
+  row["restitution_check"] = rest;
+  {  // the reference run in the same form, for the charts
+    Json e = numerics_entry(ref, w, p);
+    e["dt"] = w.dt;
+    // Its restitution, when every material has the same one (a point of the damping check).
+    bool uniform = true;
+    for (const auto& mat : w.mats.materials)
+      uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
+    e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
+    row["reference_numerics"] = e;
+  }
+}
+
+}  // namespace
+
 void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   const WaveSetup w = read_wave_setup(scene);
   // ParaView time series of the reference pulse at each pressure (0: none): frames at the
@@ -553,11 +781,18 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
   summary["pair_rule"] = w.mats.pair_rule;
   Json table = Json::array();
-  std::vector<double> col_p, col_phi, col_rho, col_vp, col_mwave, col_mprobe, col_q, col_qerr,
-      col_fdom;
+  StateTable columns;
+  Json unconverged = Json::array();
   for (size_t k = 0; k < states.size(); ++k) {
     const Prepared& p = states[k];
     const std::string g = "/pressure_" + std::to_string(k);
+    if (!p.converged) {  // not probed, no pulse: its row says where the servo stopped
+      table.push(unconverged_row(p));
+      unconverged.push(unconverged_entry(k, p));
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      columns.add(p, nan, nan, nan, nan, nan, nan);
+      continue;
+    }
     Json row = Json::object();
     row["sigma_xx"] = p.pressure;
     row["gap"] = p.gap;
@@ -571,133 +806,13 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
     double m_probe = 0;
     with_material_model(w.mats, [&](const auto& m) { m_probe = probe_m(m, w, p, box); });
     row["M_probe"] = m_probe;
-    // Waves at each amplitude (the first is the reference), then at smaller time steps.
-    Json amps = Json::array();
-    double fdom_mirrored = NAN;
-    WaveRecord ref;
-    Picks pin, pout;
-    double vp_peak = NAN;
-    for (size_t a = 0; a < w.amplitude_factors.size(); ++a) {
-      const double amp = w.velocity * w.amplitude_factors[a];
-      WaveRecord r;
-      SnapshotSeries snapshots(opts.out_dir, "snapshots_pressure_" + std::to_string(k),
-                               a == 0 ? snapshot_every : 0);
-      snapshots.record_contacts(with_contacts);
-      with_material_model(
-          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, amp, w.dt, &snapshots); });
-      const Picks pi = pick_travel_times(r.source, w.signals.picker);
-      const Picks po = pick_travel_times(r.force, w.signals.picker);
-      Json e = Json::object();
-      e["amplitude"] = amp;
-      e["travel"] = travel_times(pi, po, p.gap, p.rho_bulk, a == 0 ? &vp_peak : nullptr);
-      e["wall_seconds"] = r.seconds;
-      if (a == 0) {
-        ref = r, pin = pi, pout = po;
-      } else {  // normalized receiver signals against the reference amplitude's
-        double num = 0, den = 0;
-        const double f = w.amplitude_factors[a];
-        for (int i = 0; i < r.force.size() && i < ref.force.size(); ++i) {
-          const double x = (r.force.a[i] - po.baseline) / f, y = ref.force.a[i] - pout.baseline;
-          num = std::max(num, std::abs(x - y)), den = std::max(den, std::abs(y));
-        }
-        e["normalized_signal_max_difference"] = num / den;
-        const double dtp = po.first_peak - pout.first_peak;
-        e["first_peak_time_difference"] = std::isfinite(dtp) ? Json(dtp) : Json();
-      }
-      amps.push(e);
-    }
-    row["amplitudes"] = amps;
-    row["travel"] = travel_times(pin, pout, p.gap, p.rho_bulk, nullptr);
-    write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals),
-                 kVelocityTrace);
-    const Spectrum sf = safe_spectrum(ref.force, pout, w.signals);
-    write_signal(h5, g + "/receiver", ref.force, pout, sf, kStressTrace);
-    row["receiver_spectrum"] = spectrum_json(sf);
-    {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
-       // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
-       // dominant frequency of its own: the receiver's rise time as a frequency.
-      SignalSettings mirrored = w.signals;
-      mirrored.spectrum.window = EventWindow::Mirrored;
-      const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);
-      row["receiver_spectrum_mirrored"] = spectrum_json(sm);
-      fdom_mirrored = sm.dominant_frequency;
-      write_quantity(h5, g + "/receiver_mirrored/frequency", sm.f, frequency_unit(kStressTrace));
-      write_quantity(h5, g + "/receiver_mirrored/energy", sm.energy, energy_unit(kStressTrace));
-    }
-    // Slabs: travel times, spectra, Q between the first and the last.
-    std::vector<Picks> ps;
-    Json slabs = Json::array();
-    for (size_t s = 0; s < ref.slabs.size(); ++s) {
-      ps.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
-      const Spectrum ss = safe_spectrum(ref.slabs[s], ps[s], w.signals);
-      write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss, kVelocityTrace);
-      h5.attribute(g + "/slab_" + std::to_string(s), "distance", ref.slab_x[s]);
-      Json sj = Json::object();
-      sj["distance"] = ref.slab_x[s];
-      sj["picks"] = picks_json(ps[s]);
-      sj["travel"] = travel_times(pin, ps[s], ref.slab_x[s], p.rho_bulk, nullptr);
-      sj["spectrum"] = spectrum_json(ss);
-      slabs.push(sj);
-    }
-    row["slabs"] = slabs;
+    const Pulses pulses = run_pulses(w, p, box, k, opts, snapshot_every, with_contacts);
+    const double vp_peak = pulses.vp_peak;
+    row["amplitudes"] = pulses.amplitudes;
+    const double fdom_mirrored = write_wall_signals(h5, g, w, p, pulses, row);
     double q = NAN, qerr = NAN;
-    if (ref.slabs.size() >= 2) {
-      const size_t last = ref.slabs.size() - 1;
-      // Velocity between the slabs (no wall in the path) by each picker
-      Json between = Json::object();
-      for (const char* pk : kPickers) {
-        const double dtp = picked_time(ps[last], pk) - picked_time(ps[0], pk);
-        const double dx = ref.slab_x[last] - ref.slab_x[0];
-        between[pk] = std::isfinite(dtp) && dtp > 0 ? Json(dx / dtp) : Json();
-      }
-      row["V_p_between_slabs"] = between;
-      try {
-        const SpectralRatioFit f =
-            analyse_ratio(ref.slabs[0], ps[0], ref.slabs[last], ps[last], w.signals);
-        row["spectral_ratio"] = ratio_json(f);
-        write_quantity(h5, g + "/ratio/frequency", f.f, frequency_unit(kVelocityTrace));
-        write_quantity(h5, g + "/ratio/log_ratio", f.log_ratio, "1");  // ln(A2/A1)
-        h5.attribute(g + "/ratio", "slope", f.slope);
-        h5.attribute(g + "/ratio", "intercept", f.intercept);
-        q = f.q, qerr = f.q_error;
-      } catch (const std::exception& e) {
-        row["spectral_ratio"] = std::string("failed: ") + e.what();
-      }
-    }
-    // Numerics: travel time and Q against the time step, and against contact damping (how
-    // much of Q is the contacts' dissipation rather than scattering).
-    Json dts = Json::array();
-    for (double fct : w.dt_check) {
-      WaveRecord r;
-      with_material_model(
-          w.mats, [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt * fct); });
-      Json e = numerics_entry(r, w, p);
-      e["dt"] = w.dt * fct;
-      dts.push(e);
-    }
-    row["dt_check"] = dts;
-    Json rest = Json::array();
-    for (double e_r : w.restitution_check) {
-      MaterialSet mats = w.mats;
-      for (auto& mat : mats.materials) mat.restitution = e_r;
-      WaveRecord r;
-      with_material_model(mats,
-                          [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt); });
-      Json e = numerics_entry(r, w, p);
-      e["restitution"] = e_r;
-      rest.push(e);
-    }
-    row["restitution_check"] = rest;
-    {  // the reference run in the same form, for the charts
-      Json e = numerics_entry(ref, w, p);
-      e["dt"] = w.dt;
-      // Its restitution, when every material has the same one (a point of the damping check).
-      bool uniform = true;
-      for (const auto& mat : w.mats.materials)
-        uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
-      e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
-      row["reference_numerics"] = e;
-    }
+    analyse_slabs(h5, g, w, p, pulses, row, q, qerr);
+    numerics_checks(w, p, box, pulses.ref, row);
     const double m_wave = p.rho_bulk * vp_peak * vp_peak;
     // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
     row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
@@ -716,23 +831,14 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
               << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
               << "\n";
     table.push(row);
-    col_p.push_back(p.pressure), col_phi.push_back(p.phi), col_rho.push_back(p.rho_bulk);
-    col_vp.push_back(vp_peak), col_mwave.push_back(m_wave), col_mprobe.push_back(m_probe);
-    col_q.push_back(q), col_qerr.push_back(qerr), col_fdom.push_back(fdom_mirrored);
+    columns.add(p, vp_peak, m_wave, m_probe, q, qerr, fdom_mirrored);
     h5.attribute(g, "sigma_xx", p.pressure);
     h5.attribute(g, "gap", p.gap);
   }
   summary["states"] = table;
-  write_quantity(h5, "/table/sigma_xx", col_p, "MPa");
-  write_quantity(h5, "/table/phi", col_phi, "1");
-  // rho_bulk: the particles' mass over the volume between the walls
-  write_quantity(h5, "/table/rho_bulk", col_rho, "ug mm-3");
-  write_quantity(h5, "/table/V_p_first_peak", col_vp, "mm us-1");
-  write_quantity(h5, "/table/M_wave", col_mwave, "MPa");  // rho_bulk V_p^2
-  write_quantity(h5, "/table/M_probe", col_mprobe, "MPa");
-  write_quantity(h5, "/table/Q", col_q, "1");
-  write_quantity(h5, "/table/Q_error", col_qerr, "1");
-  write_quantity(h5, "/table/receiver_dominant_frequency_mirrored", col_fdom, "us-1");
+  // Targets the servo did not reach within preparation.max_time (preparation.unconverged).
+  summary["unconverged_states"] = unconverged;
+  columns.write(h5);
   h5.attribute("/", "states", static_cast<double>(states.size()));
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

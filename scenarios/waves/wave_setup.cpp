@@ -66,6 +66,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.gas_end_phi = s.real("preparation.gas_end_phi", 0.55);
   w.max_push = s.real("preparation.max_push", 0.003);
   w.final_relax_time = s.real("preparation.final_relax_time");
+  const std::string unconverged = s.text("preparation.unconverged", "skip");
+  s.require(unconverged == "skip" || unconverged == "stop", "preparation.unconverged",
+            "must be \"skip\" or \"stop\"");
+  w.stop_unconverged = unconverged == "stop";
   s.require(w.final_relax_time > 0, "preparation.final_relax_time", "must be positive");
   s.require(w.gas_end_phi > w.gas_phi && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
             "must lie between column.gas_volume_fraction and 0.64");

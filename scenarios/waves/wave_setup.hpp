@@ -11,6 +11,10 @@
 //                 tolerance = 0.02   relax_time   max_time   gas_end_phi = 0.55
 //                 max_push = 0.003 (largest servo step, fraction of the gap)
 //                 final_relax_time (us, the state must stay within tolerance over it)
+//                 unconverged = "skip" | "stop" (a target the servo does not reach within
+//                 max_time: left out of the analysis and listed in summary.json's
+//                 unconverged_states, the next target prepared from where it stopped; or the
+//                 run stops with the servo's last held states)
 //   [pulse]       shape = "raised_cosine" | "ricker"   duration (us)   velocity (mm/us)
 //                 amplitude_factors = [1, 2]   pre_time (us, quiet record before the pulse)
 //                 record_time (us)   sample_every (steps)
@@ -41,6 +45,7 @@ struct WaveSetup {
   double prep_friction = 0, wall_speed = 0.01, damping_time = 0, tolerance = 0.02;
   double relax_time = 0, max_time = 0, gas_end_phi = 0.55, max_push = 0.003;
   double final_relax_time = 0;
+  bool stop_unconverged = false;  // preparation.unconverged = "stop"
   std::string shape = "raised_cosine";
   double duration = 0, velocity = 0, pre_time = 0, record_time = 0;
   std::vector<double> amplitude_factors;

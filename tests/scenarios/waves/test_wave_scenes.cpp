@@ -122,3 +122,48 @@ TEST(WaveSkeleton, RattlersArePeeledRoundAfterRoundWithWallsAsContacts) {
   // Nothing is a rattler below one contact except F.
   EXPECT_NEAR(rattler_mass_fraction(c, 0.0, 5.5, 1), 0.027 / total, 1e-15);
 }
+
+// A target the servo does not reach within preparation.max_time (here 3000 us, shorter than
+// the gas compression alone) is left out: no probe, no pulse, no group in results.h5, NaN in
+// the tables, and summary.json lists it with the servo's last held states; the run ends.
+// With preparation.unconverged = "stop" the run stops instead, naming the key to raise.
+TEST(WaveTransmissionScene, TargetTheServoDoesNotReachIsListedAndNotAnalysed) {
+  std::string text = shipped_scene("wave_transmission_quick.toml");
+  replace_once(text, "pressures = [0.05, 0.2, 0.5]", "pressures = [0.05]");
+  replace_once(text, "max_time = 200000.0", "max_time = 3000.0");
+  RunOptions opts;
+  opts.out_dir = temp_dir("wave_unconverged");
+  opts.progress = false, opts.charts = false;
+  auto scene = [&] {  // as the command line does: `scene` picks the driver
+    SceneFile s = SceneFile::parse(text, "short_servo.toml");
+    (void)s.text("scene");
+    return s;
+  };
+  run_wave_transmission(scene(), opts);
+  const std::string js = slurp(opts.out_dir + "/summary.json");
+  const auto listed = js.find("\"unconverged_states\"");
+  ASSERT_NE(listed, std::string::npos) << js;
+  EXPECT_DOUBLE_EQ(json_number(js, "target_sigma_xx", "\"unconverged_states\""), 0.05);
+  EXPECT_NE(js.find("preparation.max_time", listed), std::string::npos);
+  EXPECT_NE(js.find("\"servo_converged\": false"), std::string::npos) << js;
+  {
+    const H5Reader h5(opts.out_dir + "/results.h5");
+    EXPECT_FALSE(h5.has("/pressure_0"));
+    const auto vp = h5.reals("/table/V_p_first_peak");
+    ASSERT_EQ(vp.size(), 1u);
+    EXPECT_TRUE(std::isnan(vp[0]));
+    EXPECT_TRUE(std::isnan(h5.reals("/table/M_probe")[0]));
+  }
+  std::filesystem::remove_all(opts.out_dir);
+
+  replace_once(text, "max_time = 3000.0", "max_time = 3000.0\nunconverged = \"stop\"");
+  opts.out_dir = temp_dir("wave_unconverged_stop");
+  try {
+    run_wave_transmission(scene(), opts);
+    ADD_FAILURE() << "preparation.unconverged = \"stop\" must stop the run";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("preparation.max_time"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
+  std::filesystem::remove_all(opts.out_dir);
+}
