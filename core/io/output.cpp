@@ -658,28 +658,6 @@ std::string H5Reader::text_attribute(const std::string& object, const std::strin
   return end == std::string::npos ? std::string() : text.substr(0, end + 1);
 }
 
-// ---- XDMF --------------------------------------------------------------------------
-void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
-                         const std::string& group, int n) {
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
-    << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
-    << "   <Geometry GeometryType=\"XYZ\">\n"
-    << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" "
-    << "Format=\"HDF\">" << h5_name << ":" << group << "/position</DataItem>\n"
-    << "   </Geometry>\n";
-  for (const char* name : {"radius", "velocity", "angular_velocity"}) {
-    const bool vec = std::string(name) != "radius";
-    x << "   <Attribute Name=\"" << name << "\" AttributeType=\"" << (vec ? "Vector" : "Scalar")
-      << "\" Center=\"Node\">\n    <DataItem Dimensions=\"" << n << (vec ? " 3" : "")
-      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group << "/"
-      << name << "</DataItem>\n   </Attribute>\n";
-  }
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_text_file(xdmf_path, x.str());
-}
-
 // ---- Python scripts ----------------------------------------------------------------
 bool run_python_script(const std::string& path, const std::vector<std::string>& args,
                        const std::string& what) {

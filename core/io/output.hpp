@@ -142,12 +142,6 @@ class H5Reader {
   hid_t file_ = -1;
 };
 
-// XDMF sidecar so ParaView opens a particle snapshot stored in an HDF5 file:
-// datasets <group>/position (n x 3), <group>/radius, <group>/velocity and
-// <group>/angular_velocity (n x 3), as write_state writes them.
-void write_particle_xdmf(const std::string& xdmf_path, const std::string& h5_name,
-                         const std::string& group, int n);
-
 // Runs the Python script at `path` with Debian's python3 and `args`; returns whether it ran
 // and exited with 0. A missing interpreter or script, or a failing script, is reported (`what`
 // names the product in the note: "charts", "report"), not fatal: the data is kept.

@@ -13,6 +13,7 @@
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
 #include "scenarios/common/identity_order.hpp"
+#include "scenarios/common/xdmf.hpp"
 
 namespace granular {
 
@@ -36,6 +37,18 @@ void write_state(H5Writer& out, const std::string& group, const Particles<ExecSp
   write_quantity(out, group + "/box_lo", std::vector<double>(box.lo, box.lo + 3), "mm");
   write_quantity(out, group + "/box_len", std::vector<double>(box.len, box.len + 3), "mm");
   out.attribute(group, "density", density);
+}
+
+// The XDMF frame of a group written by write_state (n particles), named "particles".
+inline XdmfFrame state_frame(const std::string& group, int n) {
+  XdmfFrame f;
+  f.name = "particles", f.group = group, f.n = n;
+  f.fields = {{"radius", false, false},
+              {"velocity", true, false},
+              {"angular_velocity", true, false},
+              {"species", false, true},
+              {"id", false, true}};
+  return f;
 }
 
 // Reads a state written by write_state back into host particles and a box.

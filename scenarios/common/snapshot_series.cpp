@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "granular_config.hpp"
+#include "scenarios/common/xdmf.hpp"
 
 namespace granular {
 
@@ -129,59 +130,20 @@ void SnapshotSeries::commit() {
 std::string snapshot_xdmf(const std::string& h5_name, const std::vector<long>& steps,
                           const std::vector<double>& times, const std::vector<int>& counts,
                           const std::vector<int>& walls) {
-  std::ostringstream x;
-  x.precision(17);
-  auto item = [&](const std::string& dims, const char* type, int precision,
-                  const std::string& path) {
-    x << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"" << type << "\" Precision=\""
-      << precision << "\" Format=\"HDF\">" << h5_name << ":" << path << "</DataItem>";
-  };
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"series\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  std::vector<XdmfFrame> frames(steps.size());
   for (size_t k = 0; k < steps.size(); ++k) {
-    const std::string g = snapshot_group(steps[k]);
-    const std::string n = std::to_string(counts[k]);
-    const bool with_walls = walls[k] > 0;
-    const std::string ind = with_walls ? "    " : "   ";
-    if (with_walls)
-      x << "   <Grid Name=\"" << g.substr(1) << "\" GridType=\"Collection\" "
-        << "CollectionType=\"Spatial\">\n    <Time Value=\"" << times[k] << "\"/>\n";
-    x << ind << "<Grid Name=\"" << (with_walls ? "particles" : g.substr(1))
-      << "\" GridType=\"Uniform\">\n"
-      << ind << " <Time Value=\"" << times[k] << "\"/>\n"
-      << ind << " <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
-      << ind << " <Geometry GeometryType=\"XYZ\">";
-    item(n + " 3", "Float", 8, g + "/position");
-    x << "</Geometry>\n";
-    struct Field {
-      const char* name;
-      bool vector, integer;
-    };
-    const Field fields[] = {{"radius", false, false},          {"velocity", true, false},
-                            {"angular_velocity", true, false}, {"force", true, false},
-                            {"species", false, true},          {"id", false, true}};
-    for (const Field& f : fields) {
-      x << ind << " <Attribute Name=\"" << f.name << "\" AttributeType=\""
-        << (f.vector ? "Vector" : "Scalar") << "\" Center=\"Node\">";
-      item(f.vector ? n + " 3" : n, f.integer ? "Int" : "Float", f.integer ? 4 : 8,
-           g + "/" + f.name);
-      x << "</Attribute>\n";
-    }
-    x << ind << "</Grid>\n";
-    if (with_walls) {
-      const int nw = walls[k];
-      x << "    <Grid Name=\"walls\" GridType=\"Uniform\">\n"
-        << "     <Time Value=\"" << times[k] << "\"/>\n"
-        << "     <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" << nw << "\">"
-        << "<DataItem Dimensions=\"" << nw << " 4\" NumberType=\"Int\" Format=\"XML\">";
-      for (int c = 0; c < 4 * nw; ++c) x << (c ? " " : "") << c;
-      x << "</DataItem></Topology>\n     <Geometry GeometryType=\"XYZ\">";
-      item(std::to_string(4 * nw) + " 3", "Float", 8, g + "/walls/quads");
-      x << "</Geometry>\n    </Grid>\n   </Grid>\n";
-    }
+    XdmfFrame& f = frames[k];
+    f.group = snapshot_group(steps[k]);
+    f.name = f.group.substr(1);
+    f.n = counts[k];
+    f.fields = {{"radius", false, false},          {"velocity", true, false},
+                {"angular_velocity", true, false}, {"force", true, false},
+                {"species", false, true},          {"id", false, true}};
+    f.nwalls = walls[k];
+    f.wall_dataset = f.group + "/walls/quads";
+    f.timed = true, f.time = times[k];
   }
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  return x.str();
+  return xdmf_text(h5_name, frames, true);
 }
 
 }  // namespace granular

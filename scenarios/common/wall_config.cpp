@@ -123,37 +123,4 @@ std::vector<double> wall_quad(const double n[3], const double p[3], const Period
   return q;
 }
 
-void write_scene_xdmf(const std::string& xdmf_path, const std::string& h5_name,
-                      const std::string& group, int n, const std::string& wall_group, int nwalls) {
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"scene\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
-    << "  <Grid Name=\"particles\" GridType=\"Uniform\">\n"
-    << "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\"/>\n"
-    << "   <Geometry GeometryType=\"XYZ\">\n"
-    << "    <DataItem Dimensions=\"" << n << " 3\" NumberType=\"Float\" Precision=\"8\" "
-    << "Format=\"HDF\">" << h5_name << ":" << group << "/position</DataItem>\n"
-    << "   </Geometry>\n";
-  for (const char* name : {"radius", "velocity"}) {
-    const bool vec = std::string(name) == "velocity";
-    x << "   <Attribute Name=\"" << name << "\" AttributeType=\"" << (vec ? "Vector" : "Scalar")
-      << "\" Center=\"Node\">\n    <DataItem Dimensions=\"" << n << (vec ? " 3" : "")
-      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << group << "/"
-      << name << "</DataItem>\n   </Attribute>\n";
-  }
-  x << "  </Grid>\n";
-  if (nwalls > 0) {
-    x << "  <Grid Name=\"walls\" GridType=\"Uniform\">\n"
-      << "   <Topology TopologyType=\"Quadrilateral\" NumberOfElements=\"" << nwalls << "\">\n"
-      << "    <DataItem Dimensions=\"" << nwalls << " 4\" NumberType=\"Int\" Format=\"XML\">";
-    for (int w = 0; w < 4 * nwalls; ++w) x << (w ? " " : "") << w;
-    x << "</DataItem>\n   </Topology>\n   <Geometry GeometryType=\"XYZ\">\n"
-      << "    <DataItem Dimensions=\"" << 4 * nwalls
-      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << wall_group
-      << "/quads</DataItem>\n   </Geometry>\n  </Grid>\n";
-  }
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_text_file(xdmf_path, x.str());
-}
-
 }  // namespace granular

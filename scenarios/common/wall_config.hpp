@@ -36,13 +36,6 @@ struct WallSeries {
   void write(H5Writer& out, const std::string& group = "/walls") const;
 };
 
-// An XDMF file showing particles (as points with radius) and the walls (each as the quad
-// where its plane cuts the box), both read from `h5_name`: particle group as written by
-// write_state and /<wall_group>/quads (walls x 4 x 3 corners).
-void write_scene_xdmf(const std::string& xdmf_path, const std::string& h5_name,
-                      const std::string& particle_group, int n, const std::string& wall_group,
-                      int nwalls);
-
 // The corners of the polygon where the plane of `w` at its current point cuts the box,
 // reduced to a quad (the plane's extent inside the box along two in-plane directions).
 std::vector<double> wall_quad(const double normal[3], const double point[3],

@@ -255,8 +255,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     H5Writer out(opts.out_dir + "/last_state.h5");
     write_state(out, "/state", sys.particles(), sys.box(), gas.density);
     out.commit();
-    write_particle_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5", "/state",
-                        sys.particles().n);
+    write_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5",
+               {state_frame("/state", sys.particles().n)}, false);
   };
 
   // A resumed run's series starts where it resumed; an interrupted one leaves none.
@@ -307,8 +307,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "kn", kn);
   h5.attribute("/", "mean_diameter", d_mean);
   h5.commit();
-  write_particle_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5", "/final_state",
-                      sys.particles().n);
+  write_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5",
+             {state_frame("/final_state", sys.particles().n)}, false);
   snapshots.finish(sys);
 
   // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.

@@ -364,8 +364,12 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "experiment_max_force", c.experiment_force);
   h5.attribute("/", "experiment_strain", c.experiment_strain);
   h5.commit();
-  write_scene_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", "/snapshot", c.fill.count,
-                   "/snapshot_walls", 6);
+  {  // the compressed state with its six walls
+    XdmfFrame scene_frame = state_frame("/snapshot", c.fill.count);
+    scene_frame.name = "scene", scene_frame.nwalls = 6;
+    scene_frame.wall_dataset = "/snapshot_walls/quads";
+    write_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", {scene_frame}, false);
+  }
   write_scene_summary(opts, summary);
   if (opts.charts)
     run_plot_script("confined_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
