@@ -7,8 +7,8 @@ it; the rest are run here.
     full_scenes_finish.py GRANULAR [--scenes a,b,...] [--threads N] [--work DIR]
                           [--record FILE] [--list]
 
---record appends one row per run to a Markdown table in FILE (date, commit, scene, threads,
-wall time, status), the file that keeps the wall times of these runs
+--record appends one row per run to a Markdown table in FILE (date, the commit the binary was
+built from as its run record names it, scene, threads, wall time, status), the file that keeps the wall times of these runs
 (scenarios/reference/full_scene_times.md). Exits 1 when any run failed or did not finish.
 The `long` label of ctest runs it (hours: the moduli studies take tens of minutes each).
 """
@@ -55,6 +55,7 @@ def run(granular, name, threads, work):
     seconds = time.time() - start
     status = "failed (exit %d): %s" % (proc.returncode, (proc.stderr.strip().splitlines()
                                                           or ["no message"])[-1])
+    built_from = None
     if proc.returncode == 0:
         summary = out / "summary.json"
         if not summary.exists():
@@ -62,10 +63,17 @@ def run(granular, name, threads, work):
         else:
             record = json.loads(summary.read_text()).get("run", {})
             status = record.get("status", "no run record")
-    return seconds, status
+            built_from = record.get("granular_commit")
+    return seconds, status, built_from
 
 
-def record(path, name, threads, seconds, status):
+def short_commit(full):
+    """`abcdef1...-modified` as `abcdef1-modified`: the commit the binary was built from."""
+    rev, _, rest = full.partition("-")
+    return rev[:7] + ("-" + rest if rest else "")
+
+
+def record(path, name, threads, seconds, status, built_from=None):
     if not path.exists():
         path.write_text(
             "# Wall times of the full scenes\n\n"
@@ -76,7 +84,10 @@ def record(path, name, threads, seconds, status):
             "|---|---|---|---|---|---|\n")
     day = time.strftime("%Y-%m-%d", time.gmtime())
     with path.open("a") as f:
-        f.write(f"| {day} | {commit()} | {name} | {threads} | {seconds / 60:.1f} | {status} |\n")
+        # The binary's own commit (its run record) where it has one: the tree may have moved
+        # on during a study of hours.
+        rev = short_commit(built_from) if built_from else commit()
+        f.write(f"| {day} | {rev} | {name} | {threads} | {seconds / 60:.1f} | {status} |\n")
 
 
 def main():
@@ -100,11 +111,11 @@ def main():
     failed = 0
     print(f"{'scene':34s} {'threads':>7s} {'minutes':>8s}  status", flush=True)
     for name in names:
-        seconds, status = run(args.granular, name, args.threads, work)
+        seconds, status, built_from = run(args.granular, name, args.threads, work)
         failed += status != "complete"
         print(f"{name:34s} {args.threads:7d} {seconds / 60:8.1f}  {status}", flush=True)
         if args.record:  # row by row: a study of hours is kept even if a later one is stopped
-            record(Path(args.record), name, args.threads, seconds, status)
+            record(Path(args.record), name, args.threads, seconds, status, built_from)
     if not args.work:
         shutil.rmtree(work, ignore_errors=True)
     sys.exit(1 if failed else 0)

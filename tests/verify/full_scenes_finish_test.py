@@ -2,8 +2,8 @@
 """tests/verify/full_scenes_finish.py against a stand-in engine (a script that sleeps, then
 writes a summary whose run record says `complete`, or exits 1):
 
-- each finished scene is recorded as soon as it ends, with its status, and a failing one
-  makes the runner exit 1;
+- each finished scene is recorded as soon as it ends, with its status and the commit its
+  binary was built from (the run record's), and a failing one makes the runner exit 1;
 - a runner stopped with SIGTERM stops the scene it is running: no engine is left behind
   without a parent, still writing into the work folder.
 
@@ -32,7 +32,8 @@ while hold.exists():
     time.sleep(0.05)
 if "chain_tones" in sys.argv[2]:
     sys.exit("stand-in failure")
-(out / "summary.json").write_text(json.dumps({"run": {"status": "complete"}}))
+(out / "summary.json").write_text(json.dumps(
+    {"run": {"status": "complete", "granular_commit": "0123456789abcdef-modified"}}))
 '''
 
 
@@ -69,6 +70,8 @@ def main():
         check(len(rows) == 2, f"two rows recorded: {rows}")
         check(rows[0].split("|")[3].strip() == "continuum_fit" and
               rows[0].rstrip(" |").endswith("complete"), f"first row: {rows[0]}")
+        check(rows[0].split("|")[2].strip() == "0123456-modified",
+              f"the row must name the binary's commit from its run record: {rows[0]}")
         check("failed (exit 1)" in rows[1], f"second row: {rows[1]}")
 
         # SIGTERM while the first scene runs: the engine goes with the runner, and the row of
