@@ -5,6 +5,30 @@
 #include <Kokkos_Core.hpp>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <iostream>
+
+#include "tests/test_support.hpp"
+
+namespace {
+// The tests' scratch folders and files (unique_temp_path, temp_dir) go when the binary ends,
+// so that runs do not pile them up in the temporary directory; a failed run keeps them.
+class ScratchCleanup : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    auto& paths = granular::testing::scratch_paths();
+    if (::testing::UnitTest::GetInstance()->Failed()) {
+      for (const auto& p : paths)
+        if (std::filesystem::exists(p)) std::cerr << "kept for inspection: " << p.string() << "\n";
+      return;
+    }
+    for (const auto& p : paths) {
+      std::error_code ignored;
+      std::filesystem::remove_all(p, ignored);
+    }
+  }
+};
+}  // namespace
 
 int main(int argc, char** argv) {
   // Listing (how ctest discovers the tests) needs no Kokkos: its OpenMP start-up warnings
@@ -14,6 +38,7 @@ int main(int argc, char** argv) {
     listing = listing || std::strcmp(argv[i], "--gtest_list_tests") == 0;
   ::testing::InitGoogleTest(&argc, argv);
   if (listing) return RUN_ALL_TESTS();
+  ::testing::AddGlobalTestEnvironment(new ScratchCleanup);  // gtest owns and deletes it
   // Threads that are not pinned, as ctest sets it; a direct run gets the same default.
   setenv("OMP_PROC_BIND", "false", 0);
   Kokkos::initialize(argc, argv);

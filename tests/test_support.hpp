@@ -17,9 +17,18 @@
 
 namespace granular::testing {
 
+// Every scratch path handed out below, removed when the test binary ends (test_main.cpp) unless
+// a test failed: then they are kept, and listed, for inspection.
+inline std::vector<std::filesystem::path>& scratch_paths() {
+  static std::vector<std::filesystem::path> paths;
+  return paths;
+}
+
 inline std::filesystem::path unique_temp_path(const std::string& name) {
-  return std::filesystem::temp_directory_path() /
-         (name + "_" + std::to_string(static_cast<long>(::getpid())));
+  const auto path = std::filesystem::temp_directory_path() /
+                    (name + "_" + std::to_string(static_cast<long>(::getpid())));
+  scratch_paths().push_back(path);
+  return path;
 }
 
 // A fresh (removed) scratch directory name for one test of this process.
