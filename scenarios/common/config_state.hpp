@@ -42,16 +42,7 @@ ConfigState snapshot(const System& sys, const std::vector<double>& density, doub
   auto h = Kokkos::HostSpace();
   ParticleRows g = gather_by_identity(p);
   ConfigState c;
-  c.particles.resize(n);
-  for (int k = 0; k < n; ++k) {
-    c.particles.x[k] = g.position[3 * k], c.particles.y[k] = g.position[3 * k + 1];
-    c.particles.z[k] = g.position[3 * k + 2];
-    c.particles.vx[k] = g.velocity[3 * k], c.particles.vy[k] = g.velocity[3 * k + 1];
-    c.particles.vz[k] = g.velocity[3 * k + 2];
-    c.particles.radius[k] = g.radius[k];
-    c.particles.density[k] = density.at(k);
-    c.particles.species[k] = g.species[k];
-  }
+  c.particles = host_particles(g, [&](int k) { return density.at(k); });
   c.w = std::move(g.angular_velocity);
   c.mass = std::move(g.mass);
   c.box = sys.box();

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/dem/host_particles.hpp"
 #include "core/run/error.hpp"
 
 namespace granular {
@@ -53,6 +54,23 @@ ParticleRows gather_by_identity(const P& p) {
     rows.radius[k] = r(i), rows.mass[k] = m(i), rows.species[k] = s(i);
   }
   return rows;
+}
+
+// The rows as host particles (positions, velocities, spins, radii, species), particle k of
+// density `density(k)`: what a system is made from again.
+template <class Density>
+HostParticles host_particles(const ParticleRows& g, Density density) {
+  HostParticles h;
+  h.resize(g.n);
+  for (int k = 0; k < g.n; ++k) {
+    h.x[k] = g.position[3 * k], h.y[k] = g.position[3 * k + 1], h.z[k] = g.position[3 * k + 2];
+    h.vx[k] = g.velocity[3 * k], h.vy[k] = g.velocity[3 * k + 1];
+    h.vz[k] = g.velocity[3 * k + 2];
+    h.wx[k] = g.angular_velocity[3 * k], h.wy[k] = g.angular_velocity[3 * k + 1];
+    h.wz[k] = g.angular_velocity[3 * k + 2];
+    h.radius[k] = g.radius[k], h.density[k] = density(k), h.species[k] = g.species[k];
+  }
+  return h;
 }
 
 }  // namespace granular

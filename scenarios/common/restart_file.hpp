@@ -166,19 +166,7 @@ void load_restart(const H5Reader& in, const std::string& g, System& sys) {
 // restore replaces every array, so the masses' last bits do not matter here).
 template <class P>
 HostParticles host_by_identity(const P& p, double density) {
-  const ParticleRows rows = gather_by_identity(p);
-  HostParticles h;
-  h.resize(rows.n);
-  for (int k = 0; k < rows.n; ++k) {
-    h.x[k] = rows.position[3 * k], h.y[k] = rows.position[3 * k + 1];
-    h.z[k] = rows.position[3 * k + 2];
-    h.vx[k] = rows.velocity[3 * k], h.vy[k] = rows.velocity[3 * k + 1];
-    h.vz[k] = rows.velocity[3 * k + 2];
-    h.wx[k] = rows.angular_velocity[3 * k], h.wy[k] = rows.angular_velocity[3 * k + 1];
-    h.wz[k] = rows.angular_velocity[3 * k + 2];
-    h.radius[k] = rows.radius[k], h.density[k] = density, h.species[k] = rows.species[k];
-  }
-  return h;
+  return host_particles(gather_by_identity(p), [density](int) { return density; });
 }
 
 }  // namespace granular
