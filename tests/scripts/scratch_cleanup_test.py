@@ -8,6 +8,7 @@ up there.)
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 
@@ -24,6 +25,7 @@ def main():
     # While it runs, note the scratch paths it makes (named ..._<pid>).
     while proc.poll() is None:
         seen |= {p.name for p in tmp.glob(f"granular_*_{proc.pid}")}
+        time.sleep(0.01)
     out = proc.stdout.read()
     if proc.returncode != 0:
         sys.exit(f"FAILED: the tests themselves failed:\n{out[-2000:]}")
