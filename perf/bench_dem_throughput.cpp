@@ -44,6 +44,8 @@
 //   friction       + tangential spring with history and Coulomb mu = 0.5, rotations
 //   rolling        + rolling and torsion resistance
 //   hertz_mindlin  Hertz normal + Mindlin tangential (stiffness form), mu = 0.5
+//   hertz_tsuji    the restitution-damped Hertz-Mindlin law of the studies, as the peer deck's
+//                  LAMMPS `granular hertz/material ... damping tsuji tangential mindlin` (below)
 //   hysteretic     hysteretic adhesive normal law (k1/k2 = 0.666, kc = k2/2) + friction
 #include <Kokkos_Core.hpp>
 #include <algorithm>
@@ -64,6 +66,7 @@
 #include "machine_info.hpp"
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/dem_output.hpp"
+#include "scenarios/lammps/native_laws.hpp"
 
 using namespace granular;
 using Exec = Kokkos::DefaultExecutionSpace;
@@ -100,8 +103,22 @@ ContactConfig physics_config(const std::string& name) {
     return c;
   }
   throw std::runtime_error("unknown physics '" + name +
-                           "' (frictionless, friction, rolling, hertz_mindlin, hysteretic, all)");
+                           "' (frictionless, friction, rolling, hertz_mindlin, hertz_tsuji, "
+                           "hysteretic, all)");
 }
+// The peer deck's Hertz law (perf/peer/bench.lmp, model hertz_tsuji), in LAMMPS' terms and SI:
+// 4/3 E* = 1e12 Pa (1e8 N/m at sqrt(delta R) = 1e-4 m, the stiffness of the linear set),
+// restitution 0.9 through Tsuji's damping, Mindlin k_t = 8 G* (NULL), the tangential dashpot
+// half the normal one, mu 0.5. The engine runs it as its own restitution-damped Hertz-Mindlin
+// law (scenarios/lammps/native_laws.hpp), with the stresses in MPa.
+constexpr const char* kHertzTsujiCoeff =
+    "* * hertz/material 1.365e12 0.9 0.3 tangential mindlin NULL 0.5 0.5 damping tsuji";
+NativeHertzTsuji hertz_tsuji_model() {
+  const LammpsPairModel m =
+      parse_lammps_pair("granular", {kHertzTsujiCoeff}, 1, lammps_units("si"));
+  return native_hertz_tsuji(m.pair(1, 1), 1e-6);
+}
+
 std::vector<int> parse_sizes(const std::string& s) {
   std::vector<int> out;
   std::stringstream ss(s);
@@ -260,13 +277,14 @@ int main(int argc, char** argv) {
     std::vector<std::string> physics_list;
     {
       std::stringstream ss(
-          physics == "all" ? "frictionless,friction,rolling,hertz_mindlin,hysteretic" : physics);
+          physics == "all" ? "frictionless,friction,rolling,hertz_mindlin,hertz_tsuji,hysteretic"
+                           : physics);
       std::string item;
       while (std::getline(ss, item, ',')) physics_list.push_back(item);
     }
     for (const std::string& phys : physics_list)
-      for (int n_req : ns)
-        with_contact_model(physics_config(phys), [&](const auto& model) {
+      for (int n_req : ns) {
+        auto run_model = [&](const auto& model) {
           using Model = std::decay_t<decltype(model)>;
           PeriodicBox box;
           HostParticles host;
@@ -450,6 +468,7 @@ int main(int argc, char** argv) {
           const double prof_total = prof.integrate + prof.strain + prof.neighbor + prof.force;
           Json row = Json::object();
           row["physics"] = phys;
+          if (phys == "hertz_tsuji") row["law_as_lammps_pair_coeff"] = kHertzTsujiCoeff;
           row["N"] = n;
           row["source"] = source;
           row["threads"] = threads;
@@ -521,7 +540,12 @@ int main(int argc, char** argv) {
                       << " GB/s, " << 100 * med * bytes / copy_bw << " % of copy " << copy_bw / 1e9
                       << " GB/s";
           std::cout << "\n";
-        });
+        };
+        if (phys == "hertz_tsuji")
+          run_model(hertz_tsuji_model());
+        else
+          with_contact_model(physics_config(phys), run_model);
+      }
     result["rows"] = rows;
     std::filesystem::create_directories(std::filesystem::path(out).parent_path());
     write_text_file(out, result.dump());

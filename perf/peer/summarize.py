@@ -40,9 +40,11 @@ PAIRS = [
     ("friction", "hooke_abs", "same formula (pair granular, absolute dashpots)"),
     ("frictionless", "frictionless_mass", "fastest LAMMPS style (gran/hooke, mu 0)"),
     ("frictionless", "frictionless_abs", "same formula (pair granular, mu 0)"),
+    ("hertz_tsuji", "hertz_mass", "fastest LAMMPS Hertz style (gran/hertz/history, mass-scaled dashpots)"),
+    ("hertz_tsuji", "hertz_tsuji", "same formula (pair granular hertz/material, mindlin, tsuji)"),
 ]
 # The cross-check needs the same formula: absolute dashpots on both sides.
-CROSS = [("friction", "hooke_abs"), ("frictionless", "frictionless_abs")]
+CROSS = [("friction", "hooke_abs"), ("frictionless", "frictionless_abs"), ("hertz_tsuji", "hertz_tsuji")]
 
 
 def run_of(path):  # the run directory a log belongs to
@@ -314,9 +316,11 @@ except ImportError:
 else:
     fig, ax = plt.subplots(1, 3, figsize=(17, 5.2))
     configs = [("engine", "friction"), ("lammps", "hooke_mass"), ("lammps", "hooke_abs"),
-               ("engine", "frictionless"), ("lammps", "frictionless_mass"), ("lammps", "frictionless_abs")]
+               ("engine", "frictionless"), ("lammps", "frictionless_mass"), ("lammps", "frictionless_abs"),
+               ("engine", "hertz_tsuji"), ("lammps", "hertz_mass"), ("lammps", "hertz_tsuji")]
     colors = {"friction": "C0", "hooke_mass": "C1", "hooke_abs": "C3", "frictionless": "C2",
-              "frictionless_mass": "C4", "frictionless_abs": "C5"}
+              "frictionless_mass": "C4", "frictionless_abs": "C5", "hertz_mass": "C6",
+              "hertz_tsuji": "C7"}
     # (a) medians at the largest two sizes, grouped by configuration
     labels, x = [], 0
     for N in sizes:

@@ -42,6 +42,11 @@ MODELS = {
         style="granular",
         coeffs=["* * hertz/material 1.0e8 1.0e9 0.3 tangential mindlin NULL 1.0 0.5 "
                 "damping viscoelastic limit_damping"]),
+    # The law the peer benchmark times (perf/peer/bench.lmp, hertz_tsuji), which the engine
+    # runs as its own restitution-damped Hertz-Mindlin law (scenarios/lammps/native_laws.hpp).
+    "granular_hertz_material_mindlin_tsuji": dict(
+        style="granular",
+        coeffs=["* * hertz/material 1.0e8 0.9 0.3 tangential mindlin NULL 0.5 0.5 damping tsuji"]),
     "granular_hertz_mindlin_mass_velocity": dict(
         style="granular",
         coeffs=["* * hertz 2.0e7 3.0e4 tangential mindlin 2.0e7 0.5 0.5 damping mass_velocity"]),
