@@ -55,6 +55,7 @@ struct ActiveRun {
   bool summary_written = false;  // the driver wrote its summary.json (its results are whole)
   std::string dir, scene, scene_file;
   std::chrono::steady_clock::time_point start, last_report;
+  std::vector<std::string> earlier_parts;  // records of the parts before this one (--resume)
 };
 ActiveRun& active_run() {
   static ActiveRun run;
@@ -82,6 +83,43 @@ FileStamp stamp(const std::string& path) {
   s.size = fs::is_directory(path, ec) ? 0 : fs::file_size(path, ec);
   s.exists = !ec;
   return s;
+}
+
+// A run continued with --resume is made of parts. Each part that ends before the run's end
+// (stopped at a checkpoint or a time budget, or failed) leaves its run record as one line of
+// <out>/run_parts.jsonl; the record of the part that completes the run lists them, with the
+// wall time of all parts together, so that a study's record is not only its last part. A part
+// killed outright (SIGKILL, a power cut) leaves no line: its time is not counted.
+constexpr const char* kPartsFile = "run_parts.jsonl";
+
+std::vector<std::string> read_parts(const std::string& dir) {
+  std::vector<std::string> parts;
+  std::ifstream in(dir + "/" + kPartsFile);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) parts.push_back(line);
+  return parts;
+}
+
+// "wall_time_s" of a record as run_record writes it (0 when absent).
+double wall_time_of(const std::string& record) {
+  const std::string key = "\"wall_time_s\":";
+  const auto at = record.find(key);
+  if (at == std::string::npos) return 0.0;
+  try {
+    return std::stod(record.substr(at + key.size()));
+  } catch (const std::exception&) {
+    return 0.0;
+  }
+}
+
+// The earlier parts and the whole run's wall time, added to this part's record.
+void add_earlier_parts(Json& rec, const std::vector<std::string>& parts, double wall_seconds) {
+  if (parts.empty()) return;
+  Json list = Json::array();
+  double total = wall_seconds;
+  for (const std::string& p : parts) list.push(Json::raw(p)), total += wall_time_of(p);
+  rec["earlier_parts"] = list;
+  rec["wall_time_all_parts_s"] = total;
 }
 
 }  // namespace
@@ -148,10 +186,12 @@ void write_scene_summary(const RunOptions& opts, Json summary,
   ActiveRun& run = active_run();
   const bool recorded = run.on && run.dir == opts.out_dir;
   if (recorded) {
-    Json rec = run_record(seconds_since(run.start), "complete", "");
+    const double wall = seconds_since(run.start);
+    Json rec = run_record(wall, "complete", "");
     rec["scene"] = run.scene;
     rec["scene_file"] = run.scene_file;
     rec["summary_from_this_run"] = true;
+    add_earlier_parts(rec, run.earlier_parts, wall);
     summary["run"] = rec;
   }
   write_summary(opts.out_dir + "/summary.json", summary, tables);
@@ -180,13 +220,34 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
   run.scene_file = scene.path();
   run.start = std::chrono::steady_clock::now();
   run.last_report = run.start - std::chrono::hours(1);
+  // A fresh run starts a new list of parts (an earlier run's file is replaced when this one
+  // stops, and removed when it completes).
+  run.earlier_parts = opts.resume ? read_parts(opts.out_dir) : std::vector<std::string>{};
   auto finish = [&](const std::string& status, const std::string& message) {
     run.on = false;
     if (!fs::is_directory(opts.out_dir) || stamp(opts.out_dir) == folder_before) return;
-    Json rec = run_record(seconds_since(run.start), status, message);
+    const double wall = seconds_since(run.start);
+    Json rec = run_record(wall, status, message);
     rec["scene"] = run.scene;
     rec["scene_file"] = run.scene_file;
     rec["summary_from_this_run"] = run.summary_written;
+    const std::string parts_path = opts.out_dir + "/" + kPartsFile;
+    if (status == "complete") {
+      std::error_code ec;
+      fs::remove(parts_path, ec);  // folded into summary.json's record
+    } else {
+      std::string lines;
+      for (const std::string& p : run.earlier_parts) lines += p + "\n";
+      std::string line = rec.dump(0);
+      for (char& c : line)
+        if (c == '\n') c = ' ';  // formatting only: JSON strings hold no raw newline
+      try {
+        write_text_file(parts_path, lines + line + "\n");
+      } catch (const std::exception& e) {  // never hides why the run ended
+        std::cerr << "warning: " << kPartsFile << " not written: " << e.what() << "\n";
+      }
+    }
+    add_earlier_parts(rec, run.earlier_parts, wall);
     write_report(opts.out_dir, rec);
   };
   try {

@@ -6,6 +6,7 @@
 // may raise an error on the console.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -270,4 +271,54 @@ TEST_F(RunReport, RunStoppedAtItsCheckpointIsReportedStoppedWithoutASummary) {
   const std::string html = read_text(opts.out_dir + "/report.html");
   EXPECT_NE(html.find("Run stopped before its end."), std::string::npos) << html.substr(0, 2000);
   EXPECT_NE(html.find("continue it with --resume"), std::string::npos);
+}
+
+// A run continued with --resume: the record of the part that completes it lists the part that
+// stopped (its status, its own wall time and commit) and the wall time of both together, so a
+// study's record is not only its last part; the list of parts is folded into summary.json.
+TEST_F(RunReport, ResumedRunRecordsEveryPartAndTheirTotalWallTime) {
+  std::string text = granular::testing::small_isotropic_scene();
+  granular::testing::replace_once(text, "checkpoint_every = 2000", "checkpoint_every = 1000");
+  const std::string path = dir_ + "/parts.toml";
+  std::ofstream(path) << text + "stop_after = 1000\n";
+  RunOptions opts;
+  opts.out_dir = dir_ + "/out_parts";
+  opts.progress = false, opts.charts = false;
+  auto run = [&]() {
+    SceneFile scene = SceneFile::load(path);
+    scene.text("scene");
+    run_scene(entry_named("isotropic_compression"), scene, opts);
+  };
+  run();
+  ASSERT_FALSE(fs::exists(opts.out_dir + "/summary.json"));
+  const std::string parts = read_text(opts.out_dir + "/run_parts.jsonl");
+  EXPECT_EQ(std::count(parts.begin(), parts.end(), '\n'), 1) << parts;
+  EXPECT_NE(parts.find("\"status\": \"stopped\""), std::string::npos) << parts;
+
+  std::ofstream(path) << text;  // the rest of the run, to its end
+  opts.resume = true;
+  run();
+  const std::string js = read_text(opts.out_dir + "/summary.json");
+  EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
+  const auto at = js.find("\"earlier_parts\"");
+  ASSERT_NE(at, std::string::npos) << js;
+  EXPECT_NE(js.find("\"status\": \"stopped\"", at), std::string::npos);
+  std::smatch m;
+  const std::string tail = js.substr(js.find("\"run\": {"));
+  ASSERT_TRUE(std::regex_search(tail, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  const double last = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(js, m, std::regex("\"wall_time_all_parts_s\": ([0-9.eE+-]+)")));
+  const double all = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(parts, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  EXPECT_NEAR(all, last + std::stod(m[1]), 1e-6 * all);
+
+  // A fresh run starts a new record: a parts file left in its folder is not its history.
+  opts.resume = false;
+  opts.out_dir = dir_ + "/out_parts_fresh";
+  fs::create_directories(opts.out_dir);
+  std::ofstream(opts.out_dir + "/run_parts.jsonl")
+      << "{\"status\": \"stopped\", \"wall_time_s\": 9}\n";
+  run();
+  EXPECT_EQ(read_text(opts.out_dir + "/summary.json").find("earlier_parts"), std::string::npos);
+  EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
 }
