@@ -131,4 +131,23 @@ ConfigState read_config(const std::string& path) {
   return c;
 }
 
+ConfigState config_from_packing(HostParticles particles, const PeriodicBox& box) {
+  ConfigState c;
+  const int n = particles.size();
+  c.w.resize(3 * static_cast<size_t>(n));
+  c.mass.resize(n);
+  double volume = 0;
+  for (int i = 0; i < n; ++i) {
+    const double a = particles.radius[i];
+    c.w[3 * i] = particles.wx[i], c.w[3 * i + 1] = particles.wy[i],
+            c.w[3 * i + 2] = particles.wz[i];
+    c.mass[i] = particles.density[i] * 4.0 / 3.0 * M_PI * a * a * a;  // as Particles::from_host
+    volume += 4.0 / 3.0 * M_PI * a * a * a;
+  }
+  c.particles = std::move(particles);
+  c.box = box;
+  c.phi = volume / box.volume();
+  return c;
+}
+
 }  // namespace granular

@@ -139,4 +139,10 @@ System restart_system(const ConfigState& c, const Model& model, const Params& pa
 void write_config(const std::string& path, const ConfigState& c);
 ConfigState read_config(const std::string& path);
 
+// Another tool's packing (read_packing_file: a LAMMPS data file, an H5MD frame, a state
+// group) as a state to probe: identities in the file's order, velocities and spins as read,
+// no contact history (every contact starts with a fresh spring). Its pressure is not known
+// before it is probed (0 here).
+ConfigState config_from_packing(HostParticles particles, const PeriodicBox& box);
+
 }  // namespace granular

@@ -3,15 +3,48 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
+#include <utility>
 
 #include "core/run/error.hpp"
 
 namespace granular::moduli_study {
 
+namespace {
+// start.from as another tool's packing, or null for a saved configuration: a `.h5` file is a
+// saved configuration (springs and all) unless start.from_group names a state group in it;
+// an H5MD series (`.h5md`, its last frame) or a LAMMPS data file (any other name) is a
+// packing. H5MD frames and state groups hold no density: start.density gives it.
+std::shared_ptr<const ConfigState> read_start_packing(const SceneFile& scene,
+                                                      const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  const std::string group = scene.text("start.from_group", "");
+  if (ext == ".h5" && group.empty()) return nullptr;
+  double density = 0;
+  if (ext == ".h5" || ext == ".h5md") {
+    density = scene.real("start.density");
+    scene.require(density > 0 && std::isfinite(density), "start.density",
+                  "must be positive and finite");
+  }
+  PeriodicBox box;
+  HostParticles h;
+  try {
+    h = read_packing_file(path, density, box, group.empty() ? "/final_state" : group);
+  } catch (const InputError& e) {
+    scene.require(false, "start.from", e.what());
+  }
+  for (double d : h.density)
+    scene.require(d > 0 && std::isfinite(d), "start.from",
+                  "holds a particle of non-positive density");
+  return std::make_shared<const ConfigState>(config_from_packing(std::move(h), box));
+}
+}  // namespace
+
 Setup read_setup(const SceneFile& scene) {
   Setup s;
   s.start_from = scene.optional_input_path("start.from");
+  if (!s.start_from.empty()) s.start_packing = read_start_packing(scene, s.start_from);
   s.contact = ContactConfig::read(scene);
   s.params.dt = scene.real("run.dt");
   scene.require(s.params.dt > 0, "run.dt", "must be positive");

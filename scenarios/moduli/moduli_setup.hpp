@@ -5,11 +5,13 @@
 #include <Kokkos_Core.hpp>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/io/scene_file.hpp"
 #include "kernels/dem/dem_system.hpp"
+#include "scenarios/common/config_state.hpp"
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/packing.hpp"
 
@@ -34,6 +36,9 @@ struct Setup {
   DemParams params;
   std::vector<PrepVariant> variants;
   std::string start_from;  // probe this saved configuration instead of preparing
+  // start.from read as another tool's packing (a LAMMPS data file, an H5MD frame, or a state
+  // group named by start.from_group); null where it is a saved configuration (with springs).
+  std::shared_ptr<const ConfigState> start_packing;
   double phi0 = 0.5, phi_max = 0.82, rate = 0, min_rate = 0, prep_inertial = 0, gas_rate = 0;
   bool loading_branch = false;
   bool friction_from_phi0 = false;  // gas compressed and relaxed without friction

@@ -184,8 +184,9 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   with_contact_model(s.contact, [&](const auto& model) {
     using Model = std::decay_t<decltype(model)>;
     if (!s.start_from.empty()) {
-      const ConfigState c = read_config(s.start_from);
-      std::cerr << "probing the saved configuration " << s.start_from << " (phi " << c.phi << ")\n";
+      const ConfigState c = s.start_packing ? *s.start_packing : read_config(s.start_from);
+      std::cerr << "probing the " << (s.start_packing ? "packing " : "saved configuration ")
+                << s.start_from << " (phi " << c.phi << ")\n";
       if (!ensemble::root()) return;  // one configuration: rank 0 probes it
       analyse(s, c, model,
               {{"mu_preparation", kNaN},

@@ -13,7 +13,9 @@
 #include <sstream>
 
 #include "core/io/output.hpp"
+#include "core/lammps/lammps_data.hpp"
 #include "scenarios/common/config_state.hpp"
+#include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
@@ -217,6 +219,64 @@ TEST(SavedConfigurations, ProbingALoadedConfigurationGivesTheInRunModuliBitwise)
   double dbar = 0;
   for (double a : c.particles.radius) dbar += 2 * a / c.size();
   EXPECT_NE(fresh.G * dbar / 1e5, with);
+  std::filesystem::remove_all(root);
+}
+
+// Another tool's packing (start.from a state group, or a LAMMPS data file) is probed as the
+// saved configuration it was written from, without that configuration's springs: the state
+// group bit for bit (every position, velocity, spin, radius and the box read back exactly),
+// the data file to round-off (SI text and back).
+TEST(SavedConfigurations, AnotherToolsPackingIsProbedAsTheSavedConfigurationWithoutItsSprings) {
+  const auto root = granular::testing::unique_temp_path("granular_external_packing_test");
+  std::filesystem::remove_all(root);
+  RunOptions opts;
+  opts.progress = false, opts.charts = false;
+  opts.out_dir = (root / "prepare").string();
+  run_elastic_moduli(scene(std::string(kPrepare) + kCommon, "prepare.toml"), opts);
+  ConfigState c = read_config((root / "prepare" / "configs" / "phi_0.6800.h5").string());
+  ASSERT_FALSE(c.pair_i.empty());
+  c.pair_i.clear(), c.pair_j.clear(), c.history.clear();
+  const std::string springless = (root / "springless.h5").string();
+  write_config(springless, c);
+  const std::string state = (root / "state.h5").string();
+  {
+    H5Writer out(state);
+    write_state(out, "/packing", particles_from<Exec>(c), c.box, 2000.0);
+    out.commit();
+  }
+  HostParticles spun = c.particles;
+  for (int i = 0; i < c.size(); ++i)
+    spun.wx[i] = c.w[3 * i], spun.wy[i] = c.w[3 * i + 1], spun.wz[i] = c.w[3 * i + 2];
+  const std::string data = (root / "packing.data").string();
+  std::ofstream(data) << lammps_data_text(spun, c.box.lo, c.box.len);
+
+  auto probe = [&](const std::string& name, const std::string& start) {
+    opts.out_dir = (root / name).string();
+    run_elastic_moduli(
+        scene("scene = \"elastic_moduli\"\n[start]\n" + start + kCommon, name + ".toml"), opts);
+    return opts.out_dir;
+  };
+  const std::string a = probe("saved", "from = \"" + springless + "\"\n");
+  const std::string b =
+      probe("state", "from = \"" + state + "\"\nfrom_group = \"/packing\"\ndensity = 2000.0\n");
+  const std::string d = probe("data", "from = \"" + data + "\"\n");
+  for (const char* name : {"K_star", "G_star", "M_star", "G_t_star", "z_corrected", "phi"}) {
+    const auto saved = column(a, name), from_state = column(b, name), from_data = column(d, name);
+    ASSERT_EQ(saved.size(), 1u) << name;
+    EXPECT_EQ(saved, from_state) << name;
+    ASSERT_EQ(from_data.size(), 1u) << name;
+    EXPECT_NEAR(from_data[0], saved[0], 1e-9 * std::fabs(saved[0])) << name;
+  }
+  EXPECT_NE(column(b, "G_star")[0], 0.0);
+
+  // An H5MD frame or a state group holds no density: without start.density it is refused,
+  // naming the key.
+  try {
+    probe("no_density", "from = \"" + state + "\"\nfrom_group = \"/packing\"\n");
+    ADD_FAILURE() << "a state group without start.density was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("start.density"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(root);
 }
 
