@@ -29,6 +29,12 @@ struct ServoSettings {
   double response_crossings = 2.0;  // the strain to the target is applied over this time
   double max_step = 0.002;          // largest volumetric strain per crossing time
   double check_crossings = 0.25;    // the rate is re-chosen this often
+  // Integral action: the proportional rate accumulated over this many crossing times is added
+  // to it (0: proportional alone). A frictional packing near jamming consolidates under the
+  // servo's strain; a proportional servo chasing that creep keeps a steady offset behind it
+  // (docs/guide_waves.md, "Why glass at 0.1 MPa does not converge"), which the accumulated
+  // rate removes.
+  double integral_crossings = 0.0;
   long min_phase_steps = 20, max_phase_steps = 50000;
   int max_cycles = 2000;  // checks before giving up
 };
@@ -100,6 +106,7 @@ ServoResult servo_to_pressure(System& sys, double target, double rho, const Serv
   const PeriodicBox& box = sys.box();
   const double goal = std::pow(target, 2.0 / 3.0);
   double tc_last = INFINITY;
+  double integral = 0;  // the integral action's rate (volumetric, compressive positive)
   while (true) {
     const Measurements m = sys.measure();
     sys.check_health(m);
@@ -119,11 +126,16 @@ ServoResult servo_to_pressure(System& sys, double target, double rho, const Serv
     const double q = m.pressure > 0 ? std::pow(m.pressure, 2.0 / 3.0) : 0.0;
     const double eps = hertz_affine_strain(m);
     const double needed = eps > 0 ? (goal - q) * eps / q : s.max_step;
-    const double rate = std::clamp(needed / (s.response_crossings * tc), -s.max_step / tc,
-                                   s.max_step / tc);  // volumetric, compressive positive
+    const double bound = s.max_step / tc;
+    const double proportional = needed / (s.response_crossings * tc);
+    const long n = phase_steps(s.check_crossings, tc, dt, s);
+    if (s.integral_crossings > 0)  // bounded like the rate itself, so it cannot wind up
+      integral = std::clamp(integral + proportional * (n * dt) / (s.integral_crossings * tc),
+                            -bound, bound);
+    const double rate = std::clamp(
+        s.integral_crossings > 0 ? proportional + integral : proportional, -bound, bound);
     const double r = std::expm1(-rate / 3.0 * dt) / dt;
     sys.set_strain_rate(r, r, r);
-    const long n = phase_steps(s.check_crossings, tc, dt, s);
     sys.step(n);
     out.steps += n;
     ++out.cycles;

@@ -135,6 +135,10 @@ Setup read_setup(const SceneFile& s) {
   sv.response_crossings = s.real("preparation.response_crossings", 2.0);
   sv.max_step = s.real("preparation.max_step", 0.002);
   sv.check_crossings = s.real("preparation.check_crossings", 0.25);
+  // Read only where given, so that the summaries of runs without it (every committed
+  // reference) stay as they were.
+  if (s.has("preparation.integral_crossings"))
+    sv.integral_crossings = s.real("preparation.integral_crossings");
   sv.max_cycles = s.small_integer("preparation.max_checks", 2000);
   sv.max_phase_steps = s.integer("preparation.max_phase_steps", 50000);
   u.probe_unconverged = s.flag("preparation.probe_unconverged", false);
@@ -146,6 +150,8 @@ Setup read_setup(const SceneFile& s) {
   s.require(sv.check_crossings > 0 && sv.check_crossings <= 1e3, "preparation.check_crossings",
             "must lie in (0, 1000] crossing times");
   s.require(sv.max_cycles >= 1, "preparation.max_checks", "must be at least 1");
+  s.require(sv.integral_crossings >= 0 && std::isfinite(sv.integral_crossings),
+            "preparation.integral_crossings", "must be 0 (no integral action) or positive");
   s.require(sv.max_phase_steps >= sv.min_phase_steps, "preparation.max_phase_steps",
             "must be at least 100");
 

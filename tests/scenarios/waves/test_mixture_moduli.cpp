@@ -181,6 +181,75 @@ TEST(PressureServo, ReachesTargetPressuresOnAHertzianGlassPacking) {
   }
 }
 
+namespace {
+// A packing in closed form for the servo: Hertzian, P = C e^{3/2} in the volumetric strain e
+// (its energy chosen so that the servo's affine estimates give back e and K = 3P/(2e)), which
+// consolidates at a constant rate (creep: e loses `creep` per time unit at a fixed box), at
+// rest (E_kin = 0).
+struct CreepingPacking {
+  double e = 0.002, creep = 0, C = 2e4;
+  DemParams prm;
+  PeriodicBox bx;
+  CreepingPacking() {
+    prm.dt = 0.1;
+    for (double& l : bx.len) l = 40.0;
+  }
+  double rate = 0;  // the box's strain rate per axis (negative: compression)
+  Measurements measure() const {
+    Measurements m;
+    m.volume = bx.volume();
+    m.pressure = C * std::pow(e, 1.5);
+    m.epot = e * m.pressure * m.volume / 2.5;
+    return m;
+  }
+  void check_health(const Measurements&) const {}
+  const DemParams& params() const { return prm; }
+  const PeriodicBox& box() const { return bx; }
+  void set_strain_rate(double r, double, double) { rate = r; }
+  void step(long n) {
+    for (long k = 0; k < n; ++k) e += (-3 * rate - creep) * prm.dt;
+  }
+};
+}  // namespace
+
+// A proportional servo chasing a packing that consolidates at a steady rate settles behind
+// its target, by the pressure whose rate just matches the creep: here 9 % short with a 2 %
+// band, so it never converges. Integral action accumulates that rate and reaches the band.
+TEST(PressureServo, IntegralActionRemovesTheOffsetBehindACreepingPacking) {
+  const double rho = 1.5e3, target = 0.1;
+  ServoSettings s;
+  s.tolerance = 0.02, s.ekin_ratio = 1e-3, s.response_crossings = 0.5, s.max_cycles = 400;
+  CreepingPacking p;
+  auto strain_at = [&](double P) { return std::pow(P / p.C, 2.0 / 3.0); };
+  auto tc_at = [&](double P) {  // the servo's crossing time at pressure P
+    Measurements m;
+    m.volume = p.bx.volume(), m.pressure = P, m.epot = strain_at(P) * P * m.volume / 2.5;
+    return crossing_time(m, rho, 40.0);
+  };
+  p.e = strain_at(0.5 * target);               // loaded from below, as the servo meets a packing
+  p.creep = 0.1 * s.max_step / tc_at(target);  // a tenth of the servo's fastest rate
+  // Steady state of the proportional servo: its rate (goal - q) e / q / (resp tc) equals the
+  // creep, with q = P^{2/3}, goal = target^{2/3} and e = q / C^{2/3}: q = goal - creep resp
+  // tc(P) C^{2/3}, solved by iteration (tc depends on P weakly).
+  const double goal = std::pow(target, 2.0 / 3.0);
+  double q = goal;
+  for (int k = 0; k < 100; ++k)
+    q = goal - p.creep * s.response_crossings * tc_at(std::pow(q, 1.5)) * std::pow(p.C, 2.0 / 3.0);
+  const double steady = std::pow(q, 1.5);
+  ASSERT_LT(steady / target - 1, -3 * s.tolerance);  // far outside the band
+
+  CreepingPacking a = p;
+  const ServoResult prop = servo_to_pressure(a, target, rho, s);
+  EXPECT_FALSE(prop.converged);
+  EXPECT_NEAR(prop.m.pressure, steady, 1e-3 * target) << "the offset the closed form predicts";
+
+  s.integral_crossings = 1.0;
+  CreepingPacking b = p;
+  const ServoResult pi = servo_to_pressure(b, target, rho, s);
+  EXPECT_TRUE(pi.converged) << "P = " << pi.m.pressure << " after " << pi.cycles << " checks";
+  EXPECT_LT(std::fabs(pi.m.pressure / target - 1), s.tolerance);
+}
+
 TEST(MixtureModuliScene, ShippedSceneFilesRead) {
   for (const char* name : {"mixture_moduli.toml", "mixture_moduli_quick.toml"}) {
     const SceneFile s = SceneFile::load(granular::testing::shipped_scene_path(name));
