@@ -12,6 +12,7 @@
 #include "core/run/error.hpp"
 #include "core/run/rng.hpp"
 #include "scenarios/common/dem_output.hpp"
+#include "scenarios/common/packing_file.hpp"
 
 namespace granular {
 
@@ -164,6 +165,27 @@ HostParticles read_packing_file(const std::string& path, double density, Periodi
   }
   if (h.size() < 2) throw InputError(path + ": fewer than 2 particles");
   return h;
+}
+
+}  // namespace granular
+
+namespace granular {
+
+HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
+                                 const std::string& path, const std::string& density_key,
+                                 const std::string& group, PeriodicBox& box) {
+  double density = 0;
+  if (ends_with(path, ".h5") || ends_with(path, ".h5md")) {
+    density = scene.real(density_key);
+    scene.require(density > 0 && std::isfinite(density), density_key,
+                  "must be positive and finite");
+  }
+  try {
+    return read_packing_file(path, density, box, group);
+  } catch (const InputError& e) {
+    scene.require(false, from_key, e.what());
+    throw;  // require(false, ...) has thrown already
+  }
 }
 
 }  // namespace granular

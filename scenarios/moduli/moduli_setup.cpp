@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/run/error.hpp"
+#include "scenarios/common/packing_file.hpp"
 
 namespace granular::moduli_study {
 
@@ -21,19 +22,9 @@ std::shared_ptr<const ConfigState> read_start_packing(const SceneFile& scene,
   const std::string ext = std::filesystem::path(path).extension().string();
   const std::string group = scene.text("start.from_group", "");
   if (ext == ".h5" && group.empty()) return nullptr;
-  double density = 0;
-  if (ext == ".h5" || ext == ".h5md") {
-    density = scene.real("start.density");
-    scene.require(density > 0 && std::isfinite(density), "start.density",
-                  "must be positive and finite");
-  }
   PeriodicBox box;
-  HostParticles h;
-  try {
-    h = read_packing_file(path, density, box, group.empty() ? "/final_state" : group);
-  } catch (const InputError& e) {
-    scene.require(false, "start.from", e.what());
-  }
+  HostParticles h = read_scene_packing(scene, "start.from", path, "start.density",
+                                       group.empty() ? "/final_state" : group, box);
   for (double d : h.density)
     scene.require(d > 0 && std::isfinite(d), "start.from",
                   "holds a particle of non-positive density");

@@ -18,6 +18,7 @@
 #include "scenarios/common/charts.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/packing_file.hpp"
 #include "scenarios/common/restart_file.hpp"
 #include "scenarios/common/run_report.hpp"
 #include "scenarios/common/snapshot_series.hpp"
@@ -122,15 +123,8 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     gas.speed = scene.real("particles.initial_speed", 0.0);
     gas.phi = scene.real("compression.phi_start");
   } else {
-    // LAMMPS data files carry densities; H5MD frames and engine states do not.
-    const std::string ext = std::filesystem::path(from).extension().string();
-    const double density = ext == ".h5" || ext == ".h5md" ? scene.real("particles.density") : 0.0;
-    try {
-      start = read_packing_file(from, density, start_box,
-                                scene.text("particles.from_group", "/final_state"));
-    } catch (const InputError& e) {
-      scene.require(false, "particles.from", e.what());
-    }
+    start = read_scene_packing(scene, "particles.from", from, "particles.density",
+                               scene.text("particles.from_group", "/final_state"), start_box);
     gas.count = start.size();
     gas.density = start.density[0];
     for (double d : start.density)

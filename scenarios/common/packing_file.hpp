@@ -1,0 +1,18 @@
+// A starting packing named by a scene key (read_packing_file), with the two scene-side rules
+// every scene that takes one shares: H5MD frames and state groups hold no density, so
+// `density_key` gives it (LAMMPS data files carry their own), and a file that cannot be read
+// is refused naming `from_key`.
+#pragma once
+#include <string>
+
+#include "core/dem/box.hpp"
+#include "core/dem/host_particles.hpp"
+#include "core/io/scene_file.hpp"
+
+namespace granular {
+
+HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
+                                 const std::string& path, const std::string& density_key,
+                                 const std::string& group, PeriodicBox& box);
+
+}  // namespace granular
