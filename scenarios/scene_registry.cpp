@@ -7,6 +7,7 @@
 #include "core/io/output.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/error.hpp"
+#include "scenarios/common/run_report.hpp"
 
 namespace granular {
 
@@ -78,6 +79,7 @@ const SceneEntry& find_scene(const SceneFile& scene) {
 bool begin_outputs(const RunOptions& opts) {
   if (opts.check_only) return false;
   make_directories(opts.out_dir);
+  note_outputs_begun(opts);
   // A run's outputs never sit beside an earlier run's: the earlier summary, report and
   // results go before anything new is written, so a run that stops or fails part-way leaves
   // no summary (nothing that looks finished) and no report of another run.

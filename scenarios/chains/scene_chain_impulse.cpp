@@ -16,9 +16,8 @@
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/power_law_fit.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -222,176 +221,224 @@ ImpulseSeries ensemble_series(const std::vector<ImpulseBlock>& mine,
   return out;
 }
 
-}  // namespace
+// The scene's keys, read and checked.
+struct ImpulseSetup {
+  ChainScene cs;
+  double v0 = 0, t_max = 0;
+  int source = 0;  // the struck bead: the first, or the centre
+  // Near-source beads fitted by an exponential; the source describes the localized energy as
+  // a power law of the distance out to ~800 beads: fitted over [1, power_span], cut at 0.8 of
+  // the front's distance at the analysis time.
+  int decay_span = 0, power_span = 0;
+  long per_sample = 0, samples = 0;
+};
 
-void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
-  ChainScene cs = read_chain_scene(scene);
-  const double v0 = scene.real("impulse.v0", 0.01);
+ImpulseSetup read_setup(const SceneFile& scene) {
+  ImpulseSetup s;
+  ChainScene& cs = s.cs;
+  cs = read_chain_scene(scene);
+  s.v0 = scene.real("impulse.v0", 0.01);
   const std::string where = scene.text("impulse.bead", "first");
-  const double t_max = scene.real("time.t_max");
-  const int decay_span = scene.small_integer("analysis.near_source_beads", 40);
-  // The source describes the localized energy as a power law of the distance out to ~800
-  // beads: fitted over [1, this], cut at 0.8 of the front's distance at the analysis time.
-  const int power_span = scene.small_integer("analysis.power_law_beads", 800);
+  s.t_max = scene.real("time.t_max");
+  s.decay_span = scene.small_integer("analysis.near_source_beads", 40);
+  s.power_span = scene.small_integer("analysis.power_law_beads", 800);
   scene.require(where == "first" || where == "centre", "impulse.bead", "must be first or centre");
-  scene.require(v0 > 0 && v0 < 0.5, "impulse.v0",
+  scene.require(s.v0 > 0 && s.v0 < 0.5, "impulse.v0",
                 "must be in (0, 0.5): small against the pre-compression");
-  scene.require(t_max >= cs.sample_every, "time.t_max", "must be at least one sample interval");
-  scene.require(decay_span >= 3, "analysis.near_source_beads", "must be at least 3");
-  scene.require(power_span >= 3, "analysis.power_law_beads", "must be at least 3");
-  const long per_sample = chain_steps_per_sample(scene, cs);
+  scene.require(s.t_max >= cs.sample_every, "time.t_max", "must be at least one sample interval");
+  scene.require(s.decay_span >= 3, "analysis.near_source_beads", "must be at least 3");
+  scene.require(s.power_span >= 3, "analysis.power_law_beads", "must be at least 3");
+  s.per_sample = chain_steps_per_sample(scene, cs);
   scene.reject_unknown_keys();
   const int N = cs.spec.beads;
-  const int source = where == "first" ? 0 : N / 2;
-  scene.require(t_max / cs.sample_every <= 1e9, "time.t_max",
+  s.source = where == "first" ? 0 : N / 2;
+  scene.require(s.t_max / cs.sample_every <= 1e9, "time.t_max",
                 "asks for more than 1e9 samples of time.sample_every");
-  const long samples = std::lround(t_max / cs.sample_every);
+  s.samples = std::lround(s.t_max / cs.sample_every);
   // Every block of realizations keeps an energy profile per sample and bead, and the
   // ensemble series another: refused here, naming the key, rather than failing to allocate.
   const double blocks = std::ceil(double(cs.realizations) / kRealizationBlock);
-  scene.require_memory("time.t_max", 8.0 * (blocks + 2) * (samples + 1.0) * (N + 6.0));
+  scene.require_memory("time.t_max", 8.0 * (blocks + 2) * (s.samples + 1.0) * (N + 6.0));
+  return s;
+}
 
+// This rank's blocks of realizations at disorder xi k; rank 0 gets the ensemble series of
+// every rank's blocks (the other ranks an empty one).
+ImpulseSeries run_xi(ImpulseSetup& s, size_t k, bool progress) {
+  ChainScene& cs = s.cs;
+  cs.spec.xi = cs.xis[k];
+  const BlockRange mine = my_blocks(cs.realizations);
+  std::vector<double> sample_times;
+  const std::vector<ImpulseBlock> blocks =
+      cs.exact ? impulse_exact(cs, mine, s.source, s.v0, s.samples, sample_times, progress)
+               : impulse_verlet(cs, mine, s.source, s.v0, s.samples, s.per_sample, sample_times,
+                                progress);
+  ImpulseSeries series = ensemble_series(blocks, sample_times, cs.realizations);
+  if (!cs.exact)
+    series.bead_steps = double(cs.realizations) * cs.spec.beads * s.samples * s.per_sample;
+  return series;
+}
+
+// What one disorder's ensemble series shows: the energy left on the source, its decay with
+// the distance near the source and over the long range, and the spreading exponent.
+struct ImpulseAnalysis {
+  double energy0 = 0;  // ensemble-mean initial energy (mean mass 1)
+  double t_front = 0;  // when the fastest front reaches the far end
+  double t_end = 0;    // the analysis window's end, before it does
+  long s_end = 1;      // its last sample
+  double residual = 0, residual_ratio = 0;
+  std::vector<double> dist;  // the near-source distances fitted
+  int far_end = 0;           // the long range's last distance
+  std::vector<double> dist_far;
+  PowerLawFit near_exp, far_pow, far_exp;
+  double exponent = 0;  // r^2 ~ t^exponent
+};
+
+ImpulseAnalysis analyse(const ImpulseSetup& s, const ImpulseSeries& run) {
+  const int N = s.cs.spec.beads, source = s.source;
+  const auto& times = run.times;
+  ImpulseAnalysis a;
+  a.energy0 = 0.5 * s.v0 * s.v0;
+  // The analysis window ends before the fastest front reaches the far end and reflects.
+  a.t_front = (N - 1 - source) / std::sqrt(1.5);
+  a.t_end = std::min(s.t_max, 0.95 * a.t_front);
+  long& s_end = a.s_end;
+  while (s_end < s.samples && times[s_end + 1] <= a.t_end) ++s_end;
+  // Energy left on the source bead: mean over the last tenth of the window, as a ratio of
+  // ensemble means (<TE_source> / (v0^2/2), the mean mass being 1) and as the mean of each
+  // realization's fraction of its own initial energy <TE_source / (b_source v0^2/2)>.
+  const long tail = std::max(1L, s_end / 10);
+  for (long t = s_end - tail + 1; t <= s_end; ++t)
+    a.residual += run.source_energy[t] / tail, a.residual_ratio += run.source_ratio[t] / tail;
+  // Near-source decay of <TE_p> at the window's end: an exponential over the first beads
+  // (localization length), and a power law against an exponential over the long range.
+  const double* last = run.profile.data() + s_end * N;
+  std::vector<double> te_near, te_far;
+  for (int d = 0; d < s.decay_span && source + d < N; ++d)
+    a.dist.push_back(d), te_near.push_back(last[source + d] / a.energy0);
+  a.far_end = std::min(
+      {s.power_span, N - 1 - source, static_cast<int>(0.8 * std::sqrt(1.5) * times[s_end])});
+  // Up to 193 distances spaced evenly in log d from 1 to far_end (each bead once), so that
+  // every decade weighs the same in both fits, as it does on the log-log chart.
+  for (int step = 0, prev = 0; a.far_end >= 1 && step <= 64 * 3; ++step) {
+    const int d = static_cast<int>(std::lround(std::pow(a.far_end, step / (64.0 * 3))));
+    if (d > prev) a.dist_far.push_back(d), te_far.push_back(last[source + d] / a.energy0);
+    prev = std::max(prev, d);
+  }
+  a.near_exp = fit_exponential(a.dist, te_near);
+  a.far_pow = fit_power_law(a.dist_far, te_far);
+  a.far_exp = fit_exponential(a.dist_far, te_far);
+  // Spreading exponent: r^2 ~ t^a (a = 2 is ballistic) over the window's second half.
+  std::vector<double> tw, w2;
+  for (long t = 1; t <= s_end; ++t)
+    if (times[t] >= 0.5 * a.t_end) tw.push_back(times[t]), w2.push_back(run.width2[t]);
+  a.exponent = fit_power_law(tw, w2).exponent;
+  return a;
+}
+
+// Group /xi_<k> of results.h5.
+void write_xi_group(H5Writer& h5, size_t k, const ImpulseSetup& s, const ImpulseSeries& run,
+                    const ImpulseAnalysis& a) {
+  const std::string g = "/xi_" + std::to_string(k);
+  // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, energies in
+  // F_0 Delta_0 (= m_0 Delta_0^2 / t_c^2), centre and width in bead indices; the source
+  // fraction and the drift are ratios.
+  write_quantity(h5, g + "/time", run.times, "1");
+  write_quantity(h5, g + "/te_mean", run.profile, "1",
+                 {static_cast<hsize_t>(s.samples + 1), static_cast<hsize_t>(s.cs.spec.beads)});
+  write_quantity(h5, g + "/centre_mean", run.centre, "1");
+  write_quantity(h5, g + "/width2_mean", run.width2, "1");
+  write_quantity(h5, g + "/source_energy", run.source_energy, "1");
+  write_quantity(h5, g + "/source_fraction_per_realization", run.source_ratio, "1");
+  write_quantity(h5, g + "/energy_drift", run.drift, "1");
+  h5.attribute(g, "xi", s.cs.spec.xi);
+  h5.attribute(g, "t_front_far_end", a.t_front);
+  h5.attribute(g, "analysis_end_sample", static_cast<double>(a.s_end));
+  h5.attribute(g, "near_exponential_rate", a.near_exp.exponent);
+  h5.attribute(g, "near_exponential_prefactor", a.near_exp.prefactor);
+  h5.attribute(g, "near_beads", static_cast<double>(a.dist.size()));
+  h5.attribute(g, "far_beads", static_cast<double>(a.far_end));
+  h5.attribute(g, "far_power_law_exponent", a.far_pow.exponent);
+  h5.attribute(g, "far_power_law_prefactor", a.far_pow.prefactor);
+  h5.attribute(g, "far_exponential_rate", a.far_exp.exponent);
+  h5.attribute(g, "far_exponential_prefactor", a.far_exp.prefactor);
+}
+
+// The run at one disorder in summary.json (`seconds`: its wall time).
+Json run_json(const ImpulseSetup& s, const ImpulseSeries& run, const ImpulseAnalysis& a,
+              double seconds) {
+  const ChainScene& cs = s.cs;
+  const double decay_rate = -a.near_exp.exponent;
+  Json j = Json::object();
+  j["xi"] = cs.spec.xi;
+  j["analysis_end_time"] = run.times[a.s_end];
+  j["source_residual_ratio_of_ensemble_means"] = a.residual / a.energy0;
+  j["source_residual_mean_of_realization_fractions"] = a.residual_ratio;
+  j["near_source_decay_per_bead"] = Json::or_null(decay_rate);
+  j["near_source_beads"] = std::vector<double>{0.0, a.dist.back()};
+  j["localization_length_beads"] = decay_rate > 0 ? Json(1.0 / decay_rate) : Json();
+  Json far = Json::object();
+  far["beads"] = std::vector<double>{1.0, static_cast<double>(a.far_end)};
+  far["points"] = static_cast<double>(a.dist_far.size());
+  far["power_law_exponent"] = Json::or_null(-a.far_pow.exponent);  // <TE_p> ~ d^-alpha
+  far["power_law_exponent_stderr"] = Json::or_null(a.far_pow.exponent_stderr);
+  far["power_law_rms_log_residual"] = Json::or_null(a.far_pow.rms_log_residual);
+  far["exponential_decay_per_bead"] = Json::or_null(-a.far_exp.exponent);
+  far["exponential_rms_log_residual"] = Json::or_null(a.far_exp.rms_log_residual);
+  j["decay_over_long_range"] = far;
+  j["centre_of_energy_distance_at_t_max"] = run.centre.back() - s.source;
+  j["width2_at_t_max"] = run.width2.back();
+  j["width2_growth_exponent"] = Json::or_null(a.exponent);  // too few points: undefined
+  j["exponent_fit_window"] = std::vector<double>{0.5 * a.t_end, run.times[a.s_end]};
+  j["front_reaches_far_end_at"] = a.t_front;
+  j["max_relative_energy_drift"] = *std::max_element(run.drift.begin(), run.drift.end());
+  j["wall_seconds"] = seconds;
+  j["solver"] = cs.exact ? "exact" : "verlet";
+  if (cs.exact)
+    j["seconds_per_realization"] = seconds / cs.realizations;
+  else
+    j["bead_steps_per_second"] = run.bead_steps / seconds;
+  return j;
+}
+
+}  // namespace
+
+void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
+  ImpulseSetup s = read_setup(scene);
   if (!begin_outputs(opts)) return;
-  // This rank's blocks of realizations at disorder xi k; rank 0 gets the ensemble series of
-  // every rank's blocks (the other ranks an empty one).
-  auto run_xi = [&](size_t k) {
-    cs.spec.xi = cs.xis[k];
-    const BlockRange mine = my_blocks(cs.realizations);
-    std::vector<double> sample_times;
-    const std::vector<ImpulseBlock> blocks =
-        cs.exact ? impulse_exact(cs, mine, source, v0, samples, sample_times, opts.progress)
-                 : impulse_verlet(cs, mine, source, v0, samples, per_sample, sample_times,
-                                  opts.progress);
-    ImpulseSeries series = ensemble_series(blocks, sample_times, cs.realizations);
-    if (!cs.exact) series.bead_steps = double(cs.realizations) * N * samples * per_sample;
-    return series;
-  };
+  ChainScene& cs = s.cs;
   if (!ensemble::root()) {  // rank 0 alone analyses and writes
-    for (size_t k = 0; k < cs.xis.size(); ++k) run_xi(k);
+    for (size_t k = 0; k < cs.xis.size(); ++k) run_xi(s, k, opts.progress);
     return;
   }
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "chain_impulse");
+  SceneOutput output(scene, opts, "chain_impulse");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json runs = Json::array();
   std::vector<double> xis, residual_means, residual_ratios;
   WallClock total_clock;
   for (size_t k = 0; k < cs.xis.size(); ++k) {
-    cs.spec.xi = cs.xis[k];
     WallClock clock;
-    const ImpulseSeries run_series = run_xi(k);
-    const auto& times = run_series.times;
-    const auto& profile = run_series.profile;
-    const auto& centre = run_series.centre;
-    const auto& width2 = run_series.width2;
-    const auto& source_energy = run_series.source_energy;
-    const auto& source_ratio = run_series.source_ratio;
-    const auto& drift = run_series.drift;
-    const double energy0 = 0.5 * v0 * v0;  // ensemble-mean initial energy (mean mass 1)
+    const ImpulseSeries run = run_xi(s, k, opts.progress);
     const double seconds = clock.seconds();
-    // The analysis window ends before the fastest front reaches the far end and reflects.
-    const double t_front = (N - 1 - source) / std::sqrt(1.5);
-    const double t_end = std::min(t_max, 0.95 * t_front);
-    long s_end = 1;
-    while (s_end < samples && times[s_end + 1] <= t_end) ++s_end;
-    // Energy left on the source bead: mean over the last tenth of the window, as a ratio of
-    // ensemble means (<TE_source> / (v0^2/2), the mean mass being 1) and as the mean of each
-    // realization's fraction of its own initial energy <TE_source / (b_source v0^2/2)>.
-    const long tail = std::max(1L, s_end / 10);
-    double residual = 0, residual_ratio = 0;
-    for (long s = s_end - tail + 1; s <= s_end; ++s)
-      residual += source_energy[s] / tail, residual_ratio += source_ratio[s] / tail;
-    // Near-source decay of <TE_p> at the window's end: an exponential over the first beads
-    // (localization length), and a power law against an exponential over the long range.
-    const double* last = profile.data() + s_end * N;
-    std::vector<double> dist, te_near, dist_far, te_far;
-    for (int d = 0; d < decay_span && source + d < N; ++d)
-      dist.push_back(d), te_near.push_back(last[source + d] / energy0);
-    const int far_end = std::min(
-        {power_span, N - 1 - source, static_cast<int>(0.8 * std::sqrt(1.5) * times[s_end])});
-    // Up to 193 distances spaced evenly in log d from 1 to far_end (each bead once), so that
-    // every decade weighs the same in both fits, as it does on the log-log chart.
-    for (int step = 0, prev = 0; far_end >= 1 && step <= 64 * 3; ++step) {
-      const int d = static_cast<int>(std::lround(std::pow(far_end, step / (64.0 * 3))));
-      if (d > prev) dist_far.push_back(d), te_far.push_back(last[source + d] / energy0);
-      prev = std::max(prev, d);
-    }
-    const PowerLawFit near_exp = fit_exponential(dist, te_near);
-    const PowerLawFit far_pow = fit_power_law(dist_far, te_far);
-    const PowerLawFit far_exp = fit_exponential(dist_far, te_far);
-    const double decay_rate = -near_exp.exponent;
-    // Spreading exponent: r^2 ~ t^a (a = 2 is ballistic) over the window's second half.
-    std::vector<double> tw, w2;
-    for (long s = 1; s <= s_end; ++s)
-      if (times[s] >= 0.5 * t_end) tw.push_back(times[s]), w2.push_back(width2[s]);
-    const double exponent = fit_power_law(tw, w2).exponent;
-    xis.push_back(cs.spec.xi), residual_means.push_back(residual / energy0);
-    residual_ratios.push_back(residual_ratio);
-    const std::string g = "/xi_" + std::to_string(k);
-    // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, energies in
-    // F_0 Delta_0 (= m_0 Delta_0^2 / t_c^2), centre and width in bead indices; the source
-    // fraction and the drift are ratios.
-    write_quantity(h5, g + "/time", times, "1");
-    write_quantity(h5, g + "/te_mean", profile, "1",
-                   {static_cast<hsize_t>(samples + 1), static_cast<hsize_t>(N)});
-    write_quantity(h5, g + "/centre_mean", centre, "1");
-    write_quantity(h5, g + "/width2_mean", width2, "1");
-    write_quantity(h5, g + "/source_energy", source_energy, "1");
-    write_quantity(h5, g + "/source_fraction_per_realization", source_ratio, "1");
-    write_quantity(h5, g + "/energy_drift", drift, "1");
-    h5.attribute(g, "xi", cs.spec.xi);
-    h5.attribute(g, "t_front_far_end", t_front);
-    h5.attribute(g, "analysis_end_sample", static_cast<double>(s_end));
-    h5.attribute(g, "near_exponential_rate", near_exp.exponent);
-    h5.attribute(g, "near_exponential_prefactor", near_exp.prefactor);
-    h5.attribute(g, "near_beads", static_cast<double>(dist.size()));
-    h5.attribute(g, "far_beads", static_cast<double>(far_end));
-    h5.attribute(g, "far_power_law_exponent", far_pow.exponent);
-    h5.attribute(g, "far_power_law_prefactor", far_pow.prefactor);
-    h5.attribute(g, "far_exponential_rate", far_exp.exponent);
-    h5.attribute(g, "far_exponential_prefactor", far_exp.prefactor);
-    Json run = Json::object();
-    run["xi"] = cs.spec.xi;
-    run["analysis_end_time"] = times[s_end];
-    run["source_residual_ratio_of_ensemble_means"] = residual / energy0;
-    run["source_residual_mean_of_realization_fractions"] = residual_ratio;
-    run["near_source_decay_per_bead"] = Json::or_null(decay_rate);
-    run["near_source_beads"] = std::vector<double>{0.0, dist.back()};
-    run["localization_length_beads"] = decay_rate > 0 ? Json(1.0 / decay_rate) : Json();
-    Json far = Json::object();
-    far["beads"] = std::vector<double>{1.0, static_cast<double>(far_end)};
-    far["points"] = static_cast<double>(dist_far.size());
-    far["power_law_exponent"] = Json::or_null(-far_pow.exponent);  // <TE_p> ~ d^-alpha
-    far["power_law_exponent_stderr"] = Json::or_null(far_pow.exponent_stderr);
-    far["power_law_rms_log_residual"] = Json::or_null(far_pow.rms_log_residual);
-    far["exponential_decay_per_bead"] = Json::or_null(-far_exp.exponent);
-    far["exponential_rms_log_residual"] = Json::or_null(far_exp.rms_log_residual);
-    run["decay_over_long_range"] = far;
-    run["centre_of_energy_distance_at_t_max"] = centre.back() - source;
-    run["width2_at_t_max"] = width2.back();
-    run["width2_growth_exponent"] = Json::or_null(exponent);  // too few points: undefined
-    run["exponent_fit_window"] = std::vector<double>{0.5 * t_end, times[s_end]};
-    run["front_reaches_far_end_at"] = t_front;
-    run["max_relative_energy_drift"] = *std::max_element(drift.begin(), drift.end());
-    run["wall_seconds"] = seconds;
-    run["solver"] = cs.exact ? "exact" : "verlet";
-    if (cs.exact)
-      run["seconds_per_realization"] = seconds / cs.realizations;
-    else
-      run["bead_steps_per_second"] = run_series.bead_steps / seconds;
-    runs.push(run);
-    const double worst_drift = *std::max_element(drift.begin(), drift.end());
+    const ImpulseAnalysis a = analyse(s, run);
+    xis.push_back(cs.spec.xi), residual_means.push_back(a.residual / a.energy0);
+    residual_ratios.push_back(a.residual_ratio);
+    write_xi_group(h5, k, s, run, a);
+    runs.push(run_json(s, run, a, seconds));
+    const double worst_drift = *std::max_element(run.drift.begin(), run.drift.end());
     if (worst_drift > 0.01)
       std::cerr << "warning: xi = " << cs.spec.xi << ": the energy of some realization drifted by "
                 << 100 * worst_drift << " % (Verlet near the stability limit of its lightest "
                 << "beads); a smaller time.dt or a larger disorder.min_mass reduces it\n";
-    std::cout << "xi = " << cs.spec.xi << ": source keeps " << residual / energy0
-              << " of the energy (" << residual_ratio << " per realization), r^2 ~ t^" << exponent
-              << ", R - source = " << centre.back() - source << " (" << seconds << " s)\n";
+    std::cout << "xi = " << cs.spec.xi << ": source keeps " << a.residual / a.energy0
+              << " of the energy (" << a.residual_ratio << " per realization), r^2 ~ t^"
+              << a.exponent << ", R - source = " << run.centre.back() - s.source << " (" << seconds
+              << " s)\n";
   }
-  h5.attribute("/", "source", source);
-  h5.attribute("/", "energy0", 0.5 * v0 * v0);
-  h5.attribute("/", "beads", N);
-  h5.commit();
+  h5.attribute("/", "source", s.source);
+  h5.attribute("/", "energy0", 0.5 * s.v0 * s.v0);
+  h5.attribute("/", "beads", cs.spec.beads);
   summary["runs"] = runs;
   // Late-time source energy against disorder, a power law over the xi > 0 runs.
   Json against_xi = Json::object();
@@ -401,8 +448,7 @@ void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
       Json::or_null(fit_power_law(xis, residual_ratios).exponent);
   summary["source_residual_exponent_vs_xi"] = against_xi;
   summary["wall_seconds"] = total_clock.seconds();
-  write_scene_summary(opts, summary);
-  if (opts.charts) run_plot_script("chain_impulse.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

@@ -18,8 +18,7 @@
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -132,24 +131,37 @@ EnsembleRun gather_band_runs(const EnsembleRun& mine, int B, long samples) {
   return out;
 }
 
-}  // namespace
+// The scene's keys, read and checked.
+struct MasterSetup {
+  ChainScene cs;
+  int B = 0;              // bands
+  int b1 = 0, b2 = 0;     // the bands of the two-tone validation
+  std::string placement;  // where each band's tone sits
+  double u0 = 0;
+  long samples = 0, check_samples = 0, per_sample = 0;
+  FitWindow fw1, fw2, fw3;  // procedures 1, 2 and the global fits
+  // The use the reduced model stands for: an ensemble of this size run to this horizon.
+  double use_realizations = 0, use_horizon = 0;
+};
 
-void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
-  ChainScene cs = read_chain_scene(scene);
-  const int B = scene.small_integer("bands.count");
+MasterSetup read_setup(const SceneFile& scene) {
+  MasterSetup m;
+  ChainScene& cs = m.cs;
+  cs = read_chain_scene(scene);
+  const int B = m.B = scene.small_integer("bands.count");
   // Where each band's tone sits: its middle bin (default), or its last bin, the source's
   // N = 4, 8, ..., 128 for L = 256 and B = 32 (N = 4r agitates band r - 1).
-  const std::string placement = scene.text("bands.tone_placement", "centre");
-  scene.require(placement == "centre" || placement == "upper_edge", "bands.tone_placement",
+  m.placement = scene.text("bands.tone_placement", "centre");
+  scene.require(m.placement == "centre" || m.placement == "upper_edge", "bands.tone_placement",
                 "must be \"centre\" or \"upper_edge\"");
-  const double u0 = scene.real("wave.u0", 0.01);
-  const long samples = scene.small_integer("time.samples");
+  m.u0 = scene.real("wave.u0", 0.01);
+  const long samples = m.samples = scene.small_integer("time.samples");
   const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
   const auto w2 = scene.reals("fit.window_linear", {2, 8});
   const auto w3 = scene.reals("fit.window_global", {0, static_cast<double>(samples)});
   const auto check_bands = scene.reals("validation.bands");
-  const long check_samples = scene.small_integer(
-      "validation.samples", static_cast<int>(std::min<long>(2 * samples, 2147483647)));
+  m.check_samples = scene.small_integer("validation.samples",
+                                        static_cast<int>(std::min<long>(2 * samples, 2147483647)));
   scene.require(!cs.exact, "time.solver",
                 "must be \"verlet\" here (the exact solver serves chain_impulse)");
   const int L = cs.spec.sites();
@@ -157,268 +169,313 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
                 "must be even for a periodic ring");
   scene.require(B >= 2 && B <= L / 2, "bands.count",
                 "must be between 2 and L/2 = " + std::to_string(L / 2));
-  scene.require(u0 > 0 && u0 < 0.1, "wave.u0", "must be in (0, 0.1)");
+  scene.require(m.u0 > 0 && m.u0 < 0.1, "wave.u0", "must be in (0, 0.1)");
   scene.require(samples >= 3, "time.samples", "must be at least 3");
   // Ensemble-mean band energies (B bands x B tone experiments) at every sample, per xi.
   scene.require_memory("time.samples",
                        8.0 * (samples + 1) * B * B * static_cast<double>(cs.xis.size()));
   scene.require_memory("validation.samples",
-                       8.0 * (check_samples + 1) * B * B * static_cast<double>(cs.xis.size()));
+                       8.0 * (m.check_samples + 1) * B * B * static_cast<double>(cs.xis.size()));
   auto window = [&](const std::vector<double>& w, const char* key) {
     scene.require(w.size() == 2 && w[0] >= 0 && w[1] > w[0] && w[1] <= samples, key,
                   "must be [first, last] sample indices within time.samples");
     return FitWindow{static_cast<int>(w[0]), static_cast<int>(w[1])};
   };
-  const FitWindow fw1 = window(w1, "fit.window_nonlinear"), fw2 = window(w2, "fit.window_linear");
-  const FitWindow fw3 = window(w3, "fit.window_global");
+  m.fw1 = window(w1, "fit.window_nonlinear"), m.fw2 = window(w2, "fit.window_linear");
+  m.fw3 = window(w3, "fit.window_global");
   scene.require(cs.realizations >= 2, "disorder.realizations",
                 "must be at least 2 (half the ensemble is held out to judge the fits)");
-  // The use the reduced model stands for: an ensemble of this size run to this horizon.
-  const double use_realizations = scene.real("cost.realizations", 1000);
-  const double use_horizon = scene.real("cost.horizon", 1000);
-  scene.require(use_realizations >= 1, "cost.realizations", "must be at least 1");
-  scene.require(use_horizon > 0 && use_horizon / cs.sample_every <= 1e7, "cost.horizon",
+  m.use_realizations = scene.real("cost.realizations", 1000);
+  m.use_horizon = scene.real("cost.horizon", 1000);
+  scene.require(m.use_realizations >= 1, "cost.realizations", "must be at least 1");
+  scene.require(m.use_horizon > 0 && m.use_horizon / cs.sample_every <= 1e7, "cost.horizon",
                 "must be positive and at most 1e7 sampling intervals");
   scene.require(check_bands.size() == 2 && check_bands[0] >= 0 && check_bands[1] >= 0 &&
                     check_bands[0] < B && check_bands[1] < B && check_bands[0] != check_bands[1],
                 "validation.bands", "must be two different band indices in [0, bands.count)");
-  scene.require(check_samples >= 1, "validation.samples", "must be positive");
-  const long per_sample = chain_steps_per_sample(scene, cs);
+  scene.require(m.check_samples >= 1, "validation.samples", "must be positive");
+  m.per_sample = chain_steps_per_sample(scene, cs);
   scene.reject_unknown_keys();
-  const int R = cs.realizations;
+  m.b1 = static_cast<int>(check_bands[0]), m.b2 = static_cast<int>(check_bands[1]);
+  return m;
+}
 
+// The ensembles at disorder xi k: the B tone experiments dealt over the ranks, the
+// two-tone validation (one experiment) run by the last rank; rank 0 gets both whole.
+std::pair<EnsembleRun, EnsembleRun> run_ensembles(MasterSetup& m,
+                                                  const std::vector<int>& band_tones, size_t k,
+                                                  bool progress) {
+  ChainScene& cs = m.cs;
+  const int B = m.B, R = cs.realizations;
+  cs.spec.xi = cs.xis[k];
+  // One experiment per band: R realizations of the chain start from that band's tone.
+  std::vector<int> tones;
+  for (int s = 0; s < B; ++s) tones.insert(tones.end(), R, band_tones[s]);
+  const EnsembleRun fit = gather_band_runs(
+      run_band_ensemble(cs, tones, 1, ensemble::my_share(B), m.u0, m.samples, m.per_sample, B,
+                        "Q fit xi=" + std::to_string(cs.spec.xi), progress),
+      B, m.samples);
+  // Validation: two tones together, a state none of the fits saw, run for longer.
+  std::vector<int> pair;
+  for (int r = 0; r < R; ++r) pair.push_back(band_tones[m.b1]), pair.push_back(band_tones[m.b2]);
+  const bool runner = ensemble::rank() == ensemble::size() - 1;
+  const EnsembleRun check = gather_band_runs(
+      run_band_ensemble(cs, pair, 2, {0, runner ? 1 : 0}, m.u0, m.check_samples, m.per_sample, B,
+                        "validation xi=" + std::to_string(cs.spec.xi), progress),
+      B, m.check_samples);
+  return std::make_pair(fit, check);
+}
+
+// The four procedures fitted on the whole ensemble.
+struct Fits {
+  Eigen::MatrixXd Q1, Q2;  // procedure 1 (non-linear, per entry), procedure 2 (linear)
+  GlobalFit G3, G4;        // global, and global with trapped fractions
+};
+Fits fit_procedures(const EnsembleRun& fit_run, const MasterSetup& m) {
+  const BandSeries data{fit_run.times, fit_run.bands};
+  return Fits{fit_transfer_matrix_nonlinear(data, m.fw1), fit_transfer_matrix_linear(data, m.fw2),
+              fit_transfer_matrix_global(data, m.fw3, false),
+              fit_transfer_matrix_global(data, m.fw3, true)};
+}
+
+// Each procedure fitted on the first half of the realizations predicts the second half,
+// experiment by experiment, from that half's own initial state: its errors, and the rms error
+// over time in /xi_<k>/held_out.
+Json held_out_errors(const EnsembleRun& fit_run, const MasterSetup& m, size_t k, H5Writer& h5) {
+  const int B = m.B;
+  const BandSeries fit_half{fit_run.times, fit_run.half[0]};
+  const BandSeries held{fit_run.times, fit_run.half[1]};
+  using Predictor = std::function<Eigen::MatrixXd(const Eigen::VectorXd&)>;
+  const Eigen::MatrixXd h1 = balance_columns(fit_transfer_matrix_nonlinear(fit_half, m.fw1));
+  const Eigen::MatrixXd h2 = fit_transfer_matrix_linear(fit_half, m.fw2);
+  const GlobalFit h3 = fit_transfer_matrix_global(fit_half, m.fw3, false);
+  const GlobalFit h4 = fit_transfer_matrix_global(fit_half, m.fw3, true);
+  // (Named one by one: nvcc's front end does not take braced lists of pairs here.)
+  std::vector<std::string> names;
+  std::vector<Predictor> predictors;
+  names.push_back("nonlinear");
+  predictors.push_back(
+      [&](const Eigen::VectorXd& e0) { return solve_master_equation(h1, e0, held.times); });
+  names.push_back("linear");
+  predictors.push_back(
+      [&](const Eigen::VectorXd& e0) { return solve_master_equation(h2, e0, held.times); });
+  names.push_back("global");
+  predictors.push_back(
+      [&](const Eigen::VectorXd& e0) { return solve_master_equation(h3.Q, e0, held.times); });
+  names.push_back("global_trapped");
+  predictors.push_back([&](const Eigen::VectorXd& e0) {
+    return solve_master_equation_trapped(h4.Q, h4.trapped, e0, held.times);
+  });
+  Json held_out = Json::object();
+  const long n_held = static_cast<long>(held.times.size());
+  for (size_t p = 0; p < names.size(); ++p) {
+    const std::string& name = names[p];
+    const Predictor& predict = predictors[p];
+    std::vector<double> agitated(B), any(B), rms(n_held, 0.0);
+    for (int e = 0; e < B; ++e) {
+      const Eigen::MatrixXd diff = predict(held.series[e].col(0)) - held.series[e];
+      agitated[e] = diff.row(e).cwiseAbs().maxCoeff();
+      any[e] = diff.cwiseAbs().maxCoeff();
+      for (long i = 0; i < n_held; ++i) rms[i] += diff.col(i).squaredNorm() / (double(B) * B);
+    }
+    for (auto& x : rms) x = std::sqrt(x);
+    // The rms error of normalized band energies: a pure number.
+    write_quantity(h5, "/xi_" + std::to_string(k) + "/held_out/rms_error_" + name, rms, "1");
+    Json one = Json::object();
+    one["max_abs_error_agitated_band"] = agitated;
+    one["max_abs_error_any_band"] = any;
+    one["worst_agitated_band_error"] = *std::max_element(agitated.begin(), agitated.end());
+    one["rms_error_at_horizon"] = rms.back();
+    held_out[name] = one;
+  }
+  return held_out;
+}
+
+// The four procedures' predictions of the two-tone validation, from its first sample.
+struct Predictions {
+  Eigen::MatrixXd p1, p2, p3, p4;  // procedure 1 uses the balanced Q (see balance_columns)
+  double me_seconds = 0;           // one master-equation solve, procedures 1 and 2
+};
+Predictions predict_validation(const Fits& f, const EnsembleRun& check) {
+  const Eigen::MatrixXd& sim = check.bands[0];
+  Predictions p;
+  WallClock me_clock;
+  p.p1 = solve_master_equation(balance_columns(f.Q1), sim.col(0), check.times);
+  p.p2 = solve_master_equation(f.Q2, sim.col(0), check.times);
+  p.me_seconds = me_clock.seconds() / 2;
+  p.p3 = solve_master_equation(f.G3.Q, sim.col(0), check.times);
+  p.p4 = solve_master_equation_trapped(f.G4.Q, f.G4.trapped, sim.col(0), check.times);
+  return p;
+}
+
+// Group /xi_<k> of results.h5.
+void write_xi_group(H5Writer& h5, size_t k, const MasterSetup& m, const EnsembleRun& fit_run,
+                    const EnsembleRun& check, const Fits& f, const Predictions& p) {
+  const std::string g = "/xi_" + std::to_string(k);
+  const auto BB = static_cast<hsize_t>(m.B);
+  // Reduced units (docs/model_chains.md §1), so every unit is "1": times in t_c, the
+  // transfer matrices Q in 1/t_c, band energies normalized by the total, fractions.
+  write_quantity(h5, g + "/times", fit_run.times, "1");
+  std::vector<double> series;
+  for (const auto& mat : fit_run.bands) {
+    const auto flat = flatten(mat);
+    series.insert(series.end(), flat.begin(), flat.end());
+  }
+  write_quantity(h5, g + "/band_series", series, "1",
+                 {BB, BB, static_cast<hsize_t>(m.samples + 1)});
+  write_quantity(h5, g + "/Q_nonlinear", flatten(f.Q1), "1", {BB, BB});
+  write_quantity(h5, g + "/Q_linear", flatten(f.Q2), "1", {BB, BB});
+  write_quantity(h5, g + "/Q_global", flatten(f.G3.Q), "1", {BB, BB});
+  write_quantity(h5, g + "/Q_global_trapped", flatten(f.G4.Q), "1", {BB, BB});
+  write_quantity(h5, g + "/trapped_fraction",
+                 std::vector<double>(f.G4.trapped.data(), f.G4.trapped.data() + m.B), "1");
+  write_quantity(h5, g + "/held_out/times", fit_run.times, "1");
+  write_quantity(h5, g + "/validation/times", check.times, "1");
+  const hsize_t T = check.times.size();
+  write_quantity(h5, g + "/validation/simulated", flatten(check.bands[0]), "1", {BB, T});
+  write_quantity(h5, g + "/validation/predicted_nonlinear", flatten(p.p1), "1", {BB, T});
+  write_quantity(h5, g + "/validation/predicted_linear", flatten(p.p2), "1", {BB, T});
+  write_quantity(h5, g + "/validation/predicted_global", flatten(p.p3), "1", {BB, T});
+  write_quantity(h5, g + "/validation/predicted_global_trapped", flatten(p.p4), "1", {BB, T});
+  h5.attribute(g, "xi", m.cs.spec.xi);
+  h5.attribute(g + "/validation", "band_1", m.b1);
+  h5.attribute(g + "/validation", "band_2", m.b2);
+}
+
+// The run at one disorder in summary.json: the fitted loss rates, how far each procedure's
+// columns are from conserving energy, the held-out and the validation errors.
+Json run_json(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRun& check,
+              const Fits& f, const Predictions& p, Json held_out) {
+  const int B = m.B, b1 = m.b1, b2 = m.b2;
+  const Eigen::MatrixXd& sim = check.bands[0];
+  auto band_error = [&](const Eigen::MatrixXd& pred, int b) {
+    return (pred.row(b) - sim.row(b)).cwiseAbs().maxCoeff();
+  };
+  Json run = Json::object();
+  run["xi"] = m.cs.spec.xi;
+  std::vector<double> d1, d2, cs1, cs2;
+  for (int s = 0; s < B; ++s) {
+    d1.push_back(f.Q1(s, s)), d2.push_back(f.Q2(s, s));
+    cs1.push_back(f.Q1.col(s).sum()), cs2.push_back(f.Q2.col(s).sum());
+  }
+  run["diag_Q_nonlinear"] = d1;
+  run["diag_Q_linear"] = d2;
+  run["column_sums_nonlinear"] = cs1;
+  run["column_sums_linear"] = cs2;
+  // Procedure 1 fits every entry on its own: how far its columns are from conserving energy.
+  double violation = 0;
+  for (int c = 0; c < B; ++c) violation = std::max(violation, std::abs(cs1[c] / d1[c]));
+  run["nonlinear_max_column_sum_over_diagonal"] = violation;
+  std::vector<double> d3, d4, cs4;
+  for (int c = 0; c < B; ++c)
+    d3.push_back(f.G3.Q(c, c)), d4.push_back(f.G4.Q(c, c)), cs4.push_back(f.G4.Q.col(c).sum());
+  run["diag_Q_global"] = d3;
+  run["diag_Q_global_trapped"] = d4;
+  run["column_sums_global_trapped"] = cs4;
+  run["trapped_fraction"] = std::vector<double>(f.G4.trapped.data(), f.G4.trapped.data() + B);
+  run["global_fit_rms_residual"] = std::vector<double>{f.G3.rms_residual, f.G4.rms_residual};
+  run["global_fit_iterations"] =
+      std::vector<double>{double(f.G3.iterations), double(f.G4.iterations)};
+  run["held_out"] = std::move(held_out);
+  run["max_imaginary_part_relative"] = std::max(fit_run.max_imag, check.max_imag);
+  Json val = Json::object();
+  val["bands"] = std::vector<double>{double(b1), double(b2)};
+  val["max_abs_error_nonlinear"] = std::vector<double>{band_error(p.p1, b1), band_error(p.p1, b2)};
+  val["max_abs_error_linear"] = std::vector<double>{band_error(p.p2, b1), band_error(p.p2, b2)};
+  val["max_abs_error_global"] = std::vector<double>{band_error(p.p3, b1), band_error(p.p3, b2)};
+  val["max_abs_error_global_trapped"] =
+      std::vector<double>{band_error(p.p4, b1), band_error(p.p4, b2)};
+  // Over the fitted horizon only (the Markovian model is fitted up to the window's end).
+  const long horizon = std::min<long>(std::max(m.fw1.last, m.fw2.last), check.times.size() - 1);
+  val["max_abs_error_within_fit_horizon_nonlinear"] =
+      (p.p1 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+  val["max_abs_error_within_fit_horizon_linear"] =
+      (p.p2 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_nonlinear"] = (p.p1 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_linear"] = (p.p2 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_global"] = (p.p3 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_global_trapped"] = (p.p4 - sim).cwiseAbs().maxCoeff();
+  val["ensemble_seconds"] = check.seconds;
+  val["master_equation_seconds"] = p.me_seconds;
+  val["speedup"] = check.seconds / std::max(p.me_seconds, 1e-9);
+  run["validation"] = val;
+  run["fit_ensemble_seconds"] = fit_run.seconds;
+  run["bead_steps_per_second"] = double(fit_run.bead_steps) / fit_run.seconds;
+  std::cout << "xi = " << m.cs.spec.xi << ": Q_ss(band 0) = " << f.Q1(0, 0) << " / " << f.Q2(0, 0)
+            << ", Q_ss(band " << B - 1 << ") = " << f.Q1(B - 1, B - 1) << " / "
+            << f.Q2(B - 1, B - 1) << "; prediction error bands " << b1 << "," << b2
+            << ": procedure 1 " << band_error(p.p1, b1) << ", " << band_error(p.p1, b2)
+            << ", procedure 2 " << band_error(p.p2, b1) << ", " << band_error(p.p2, b2)
+            << " (ensemble " << check.seconds << " s, master equation " << p.me_seconds << " s)\n";
+  return run;
+}
+
+// The realistic use: `cost.realizations` chains to `cost.horizon`, sampled as here, by the
+// ensemble (at the speed just measured) or by the trapped-fraction master equation (timed:
+// one propagator, then one B x B product per sample).
+Json cost_entry(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRun& check,
+                const Fits& f) {
+  const ChainScene& cs = m.cs;
+  std::vector<double> times;
+  for (double t = 0; t <= m.use_horizon + 1e-9 * m.use_horizon; t += cs.sample_every)
+    times.push_back(t);
+  const int repeats = 5;
+  WallClock clock;
+  double sink = 0;
+  for (int r = 0; r < repeats; ++r)
+    sink += solve_master_equation_trapped(f.G4.Q, f.G4.trapped, check.bands[0].col(0), times)(0, 0);
+  const double me = clock.seconds() / repeats;
+  if (!std::isfinite(sink)) throw std::runtime_error("master equation: non-finite energies");
+  const double rate = double(fit_run.bead_steps) / fit_run.seconds;
+  const double ensemble = m.use_realizations * cs.spec.beads * (m.use_horizon / cs.dt) / rate;
+  Json c = Json::object();
+  c["xi"] = cs.spec.xi;
+  c["ensemble_seconds_at_measured_speed"] = ensemble;
+  c["master_equation_seconds_measured"] = me;
+  c["ratio"] = ensemble / std::max(me, 1e-9);
+  return c;
+}
+
+}  // namespace
+
+void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
+  MasterSetup m = read_setup(scene);
   if (!begin_outputs(opts)) return;
+  const int L = m.cs.spec.sites(), B = m.B;
   std::vector<int> band_tones;
   for (int s = 0; s < B; ++s)
-    band_tones.push_back(placement == "upper_edge" ? chain_band_edge_tone(s, L, B)
-                                                   : chain_band_tone(s, L, B));
-  // The ensembles at disorder xi k: the B tone experiments dealt over the ranks, the
-  // two-tone validation (one experiment) run by the last rank; rank 0 gets both whole.
-  auto run_ensembles = [&](size_t k) {
-    cs.spec.xi = cs.xis[k];
-    // One experiment per band: R realizations of the chain start from that band's tone.
-    std::vector<int> tones;
-    for (int s = 0; s < B; ++s) tones.insert(tones.end(), R, band_tones[s]);
-    const EnsembleRun fit = gather_band_runs(
-        run_band_ensemble(cs, tones, 1, ensemble::my_share(B), u0, samples, per_sample, B,
-                          "Q fit xi=" + std::to_string(cs.spec.xi), opts.progress),
-        B, samples);
-    // Validation: two tones together, a state none of the fits saw, run for longer.
-    const int b1 = static_cast<int>(check_bands[0]), b2 = static_cast<int>(check_bands[1]);
-    std::vector<int> pair;
-    for (int r = 0; r < R; ++r) pair.push_back(band_tones[b1]), pair.push_back(band_tones[b2]);
-    const bool runner = ensemble::rank() == ensemble::size() - 1;
-    const EnsembleRun check = gather_band_runs(
-        run_band_ensemble(cs, pair, 2, {0, runner ? 1 : 0}, u0, check_samples, per_sample, B,
-                          "validation xi=" + std::to_string(cs.spec.xi), opts.progress),
-        B, check_samples);
-    return std::make_pair(fit, check);
-  };
+    band_tones.push_back(m.placement == "upper_edge" ? chain_band_edge_tone(s, L, B)
+                                                     : chain_band_tone(s, L, B));
   if (!ensemble::root()) {  // rank 0 alone fits, predicts and writes
-    for (size_t k = 0; k < cs.xis.size(); ++k) run_ensembles(k);
+    for (size_t k = 0; k < m.cs.xis.size(); ++k) run_ensembles(m, band_tones, k, opts.progress);
     return;
   }
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "chain_master_equation");
+  SceneOutput output(scene, opts, "chain_master_equation");
   Json runs = Json::array();
   WallClock total_clock;
   Json cost_runs = Json::array();
-  for (size_t k = 0; k < cs.xis.size(); ++k) {
-    const auto ens = run_ensembles(k);
-    const EnsembleRun& fit_run = ens.first;
-    const EnsembleRun& check = ens.second;
-    BandSeries data{fit_run.times, fit_run.bands};
-    const Eigen::MatrixXd Q1 = fit_transfer_matrix_nonlinear(data, fw1);
-    const Eigen::MatrixXd Q2 = fit_transfer_matrix_linear(data, fw2);
-    const GlobalFit G3 = fit_transfer_matrix_global(data, fw3, false);
-    const GlobalFit G4 = fit_transfer_matrix_global(data, fw3, true);
-    // Each procedure fitted on the first half of the realizations predicts the second half,
-    // experiment by experiment, from that half's own initial state.
-    const BandSeries fit_half{fit_run.times, fit_run.half[0]};
-    const BandSeries held{fit_run.times, fit_run.half[1]};
-    using Predictor = std::function<Eigen::MatrixXd(const Eigen::VectorXd&)>;
-    const Eigen::MatrixXd h1 = balance_columns(fit_transfer_matrix_nonlinear(fit_half, fw1));
-    const Eigen::MatrixXd h2 = fit_transfer_matrix_linear(fit_half, fw2);
-    const GlobalFit h3 = fit_transfer_matrix_global(fit_half, fw3, false);
-    const GlobalFit h4 = fit_transfer_matrix_global(fit_half, fw3, true);
-    // (Named one by one: nvcc's front end does not take braced lists of pairs here.)
-    std::vector<std::string> names;
-    std::vector<Predictor> predictors;
-    names.push_back("nonlinear");
-    predictors.push_back(
-        [&](const Eigen::VectorXd& e0) { return solve_master_equation(h1, e0, held.times); });
-    names.push_back("linear");
-    predictors.push_back(
-        [&](const Eigen::VectorXd& e0) { return solve_master_equation(h2, e0, held.times); });
-    names.push_back("global");
-    predictors.push_back(
-        [&](const Eigen::VectorXd& e0) { return solve_master_equation(h3.Q, e0, held.times); });
-    names.push_back("global_trapped");
-    predictors.push_back([&](const Eigen::VectorXd& e0) {
-      return solve_master_equation_trapped(h4.Q, h4.trapped, e0, held.times);
-    });
-    Json held_out = Json::object();
-    const long n_held = static_cast<long>(held.times.size());
-    for (size_t p = 0; p < names.size(); ++p) {
-      const std::string& name = names[p];
-      const Predictor& predict = predictors[p];
-      std::vector<double> agitated(B), any(B), rms(n_held, 0.0);
-      for (int e = 0; e < B; ++e) {
-        const Eigen::MatrixXd diff = predict(held.series[e].col(0)) - held.series[e];
-        agitated[e] = diff.row(e).cwiseAbs().maxCoeff();
-        any[e] = diff.cwiseAbs().maxCoeff();
-        for (long i = 0; i < n_held; ++i) rms[i] += diff.col(i).squaredNorm() / (double(B) * B);
-      }
-      for (auto& x : rms) x = std::sqrt(x);
-      // The rms error of normalized band energies: a pure number.
-      write_quantity(h5, "/xi_" + std::to_string(k) + "/held_out/rms_error_" + name, rms, "1");
-      Json one = Json::object();
-      one["max_abs_error_agitated_band"] = agitated;
-      one["max_abs_error_any_band"] = any;
-      one["worst_agitated_band_error"] = *std::max_element(agitated.begin(), agitated.end());
-      one["rms_error_at_horizon"] = rms.back();
-      held_out[name] = one;
-    }
-    const int b1 = static_cast<int>(check_bands[0]), b2 = static_cast<int>(check_bands[1]);
-    const Eigen::MatrixXd& sim = check.bands[0];
-    WallClock me_clock;
-    const Eigen::MatrixXd pred1 =
-        solve_master_equation(balance_columns(Q1), sim.col(0), check.times);
-    const Eigen::MatrixXd pred2 = solve_master_equation(Q2, sim.col(0), check.times);
-    const double me_seconds = me_clock.seconds() / 2;
-    const Eigen::MatrixXd pred3 = solve_master_equation(G3.Q, sim.col(0), check.times);
-    const Eigen::MatrixXd pred4 =
-        solve_master_equation_trapped(G4.Q, G4.trapped, sim.col(0), check.times);
-    auto band_error = [&](const Eigen::MatrixXd& pred, int b) {
-      return (pred.row(b) - sim.row(b)).cwiseAbs().maxCoeff();
-    };
-    const std::string g = "/xi_" + std::to_string(k);
-    const auto BB = static_cast<hsize_t>(B);
-    // Reduced units (docs/model_chains.md §1), so every unit is "1": times in t_c, the
-    // transfer matrices Q in 1/t_c, band energies normalized by the total, fractions.
-    write_quantity(h5, g + "/times", fit_run.times, "1");
-    std::vector<double> series;
-    for (const auto& m : fit_run.bands) {
-      const auto f = flatten(m);
-      series.insert(series.end(), f.begin(), f.end());
-    }
-    write_quantity(h5, g + "/band_series", series, "1",
-                   {BB, BB, static_cast<hsize_t>(samples + 1)});
-    write_quantity(h5, g + "/Q_nonlinear", flatten(Q1), "1", {BB, BB});
-    write_quantity(h5, g + "/Q_linear", flatten(Q2), "1", {BB, BB});
-    write_quantity(h5, g + "/Q_global", flatten(G3.Q), "1", {BB, BB});
-    write_quantity(h5, g + "/Q_global_trapped", flatten(G4.Q), "1", {BB, BB});
-    write_quantity(h5, g + "/trapped_fraction",
-                   std::vector<double>(G4.trapped.data(), G4.trapped.data() + B), "1");
-    write_quantity(h5, g + "/held_out/times", held.times, "1");
-    write_quantity(h5, g + "/validation/times", check.times, "1");
-    const hsize_t T = check.times.size();
-    write_quantity(h5, g + "/validation/simulated", flatten(sim), "1", {BB, T});
-    // Procedure 1 predictions use the balanced Q (see balance_columns).
-    write_quantity(h5, g + "/validation/predicted_nonlinear", flatten(pred1), "1", {BB, T});
-    write_quantity(h5, g + "/validation/predicted_linear", flatten(pred2), "1", {BB, T});
-    write_quantity(h5, g + "/validation/predicted_global", flatten(pred3), "1", {BB, T});
-    write_quantity(h5, g + "/validation/predicted_global_trapped", flatten(pred4), "1", {BB, T});
-    h5.attribute(g, "xi", cs.spec.xi);
-    h5.attribute(g + "/validation", "band_1", b1);
-    h5.attribute(g + "/validation", "band_2", b2);
-    Json run = Json::object();
-    run["xi"] = cs.spec.xi;
-    std::vector<double> d1, d2, cs1, cs2;
-    for (int s = 0; s < B; ++s) {
-      d1.push_back(Q1(s, s)), d2.push_back(Q2(s, s));
-      cs1.push_back(Q1.col(s).sum()), cs2.push_back(Q2.col(s).sum());
-    }
-    run["diag_Q_nonlinear"] = d1;
-    run["diag_Q_linear"] = d2;
-    run["column_sums_nonlinear"] = cs1;
-    run["column_sums_linear"] = cs2;
-    // Procedure 1 fits every entry on its own: how far its columns are from conserving energy.
-    double violation = 0;
-    for (int c = 0; c < B; ++c) violation = std::max(violation, std::abs(cs1[c] / d1[c]));
-    run["nonlinear_max_column_sum_over_diagonal"] = violation;
-    std::vector<double> d3, d4, cs4;
-    for (int c = 0; c < B; ++c)
-      d3.push_back(G3.Q(c, c)), d4.push_back(G4.Q(c, c)), cs4.push_back(G4.Q.col(c).sum());
-    run["diag_Q_global"] = d3;
-    run["diag_Q_global_trapped"] = d4;
-    run["column_sums_global_trapped"] = cs4;
-    run["trapped_fraction"] = std::vector<double>(G4.trapped.data(), G4.trapped.data() + B);
-    run["global_fit_rms_residual"] = std::vector<double>{G3.rms_residual, G4.rms_residual};
-    run["global_fit_iterations"] =
-        std::vector<double>{double(G3.iterations), double(G4.iterations)};
-    run["held_out"] = held_out;
-    run["max_imaginary_part_relative"] = std::max(fit_run.max_imag, check.max_imag);
-    Json val = Json::object();
-    val["bands"] = std::vector<double>{double(b1), double(b2)};
-    val["max_abs_error_nonlinear"] =
-        std::vector<double>{band_error(pred1, b1), band_error(pred1, b2)};
-    val["max_abs_error_linear"] = std::vector<double>{band_error(pred2, b1), band_error(pred2, b2)};
-    val["max_abs_error_global"] = std::vector<double>{band_error(pred3, b1), band_error(pred3, b2)};
-    val["max_abs_error_global_trapped"] =
-        std::vector<double>{band_error(pred4, b1), band_error(pred4, b2)};
-    // Over the fitted horizon only (the Markovian model is fitted up to the window's end).
-    const long horizon = std::min<long>(std::max(fw1.last, fw2.last), check.times.size() - 1);
-    val["max_abs_error_within_fit_horizon_nonlinear"] =
-        (pred1 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
-    val["max_abs_error_within_fit_horizon_linear"] =
-        (pred2 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
-    val["max_abs_error_all_bands_nonlinear"] = (pred1 - sim).cwiseAbs().maxCoeff();
-    val["max_abs_error_all_bands_linear"] = (pred2 - sim).cwiseAbs().maxCoeff();
-    val["max_abs_error_all_bands_global"] = (pred3 - sim).cwiseAbs().maxCoeff();
-    val["max_abs_error_all_bands_global_trapped"] = (pred4 - sim).cwiseAbs().maxCoeff();
-    val["ensemble_seconds"] = check.seconds;
-    val["master_equation_seconds"] = me_seconds;
-    val["speedup"] = check.seconds / std::max(me_seconds, 1e-9);
-    run["validation"] = val;
-    run["fit_ensemble_seconds"] = fit_run.seconds;
-    run["bead_steps_per_second"] = double(fit_run.bead_steps) / fit_run.seconds;
-    runs.push(run);
-    // The realistic use: `cost.realizations` chains to `cost.horizon`, sampled as here, by the
-    // ensemble (at the speed just measured) or by the trapped-fraction master equation
-    // (timed: one propagator, then one B x B product per sample).
-    {
-      std::vector<double> times;
-      for (double t = 0; t <= use_horizon + 1e-9 * use_horizon; t += cs.sample_every)
-        times.push_back(t);
-      const int repeats = 5;
-      WallClock clock;
-      double sink = 0;
-      for (int r = 0; r < repeats; ++r)
-        sink += solve_master_equation_trapped(G4.Q, G4.trapped, sim.col(0), times)(0, 0);
-      const double me = clock.seconds() / repeats;
-      if (!std::isfinite(sink)) throw std::runtime_error("master equation: non-finite energies");
-      const double rate = double(fit_run.bead_steps) / fit_run.seconds;
-      const double ensemble = use_realizations * cs.spec.beads * (use_horizon / cs.dt) / rate;
-      Json c = Json::object();
-      c["xi"] = cs.spec.xi;
-      c["ensemble_seconds_at_measured_speed"] = ensemble;
-      c["master_equation_seconds_measured"] = me;
-      c["ratio"] = ensemble / std::max(me, 1e-9);
-      cost_runs.push(c);
-    }
-    std::cout << "xi = " << cs.spec.xi << ": Q_ss(band 0) = " << Q1(0, 0) << " / " << Q2(0, 0)
-              << ", Q_ss(band " << B - 1 << ") = " << Q1(B - 1, B - 1) << " / " << Q2(B - 1, B - 1)
-              << "; prediction error bands " << b1 << "," << b2 << ": procedure 1 "
-              << band_error(pred1, b1) << ", " << band_error(pred1, b2) << ", procedure 2 "
-              << band_error(pred2, b1) << ", " << band_error(pred2, b2) << " (ensemble "
-              << check.seconds << " s, master equation " << me_seconds << " s)\n";
+  for (size_t k = 0; k < m.cs.xis.size(); ++k) {
+    const auto [fit_run, check] = run_ensembles(m, band_tones, k, opts.progress);
+    const Fits f = fit_procedures(fit_run, m);
+    Json held_out = held_out_errors(fit_run, m, k, output.h5());
+    const Predictions p = predict_validation(f, check);
+    write_xi_group(output.h5(), k, m, fit_run, check, f, p);
+    runs.push(run_json(m, fit_run, check, f, p, std::move(held_out)));
+    cost_runs.push(cost_entry(m, fit_run, check, f));
   }
-  h5.attribute("/", "bands", B);
-  h5.commit();
+  output.h5().attribute("/", "bands", B);
+  Json& summary = output.summary();
   summary["runs"] = runs;
   summary["band_tones"] = std::vector<double>(band_tones.begin(), band_tones.end());
-  summary["tone_placement"] = placement;
+  summary["tone_placement"] = m.placement;
   Json cost = Json::object();
-  cost["realizations"] = use_realizations;
-  cost["horizon"] = use_horizon;
-  cost["sample_every"] = cs.sample_every;
+  cost["realizations"] = m.use_realizations;
+  cost["horizon"] = m.use_horizon;
+  cost["sample_every"] = m.cs.sample_every;
   cost["per_xi"] = cost_runs;
   summary["cost_for_realistic_use"] = cost;
   summary["wall_seconds"] = total_clock.seconds();
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("chain_master_equation.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

@@ -19,8 +19,7 @@
 #include "core/run/progress.hpp"
 #include "kernels/chain/chain_energy.hpp"
 #include "scenarios/chains/chain_config.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -115,20 +114,33 @@ std::vector<double> row(const std::vector<double>& m, int r, long T) {
   return std::vector<double>(m.begin() + r * T, m.begin() + (r + 1) * T);
 }
 
-}  // namespace
+// The scene's keys, read and checked.
+struct TonesSetup {
+  ChainScene cs;
+  int B = 0, L = 0;  // bands, sites
+  long samples = 0, per_sample = 0;
+  std::vector<int> tones;  // distinct, as listed (wave.tones, then the centres of wave.bands)
+  std::vector<double> amplitudes;
+  int mapped = 0;            // the realization whose maps are kept
+  int ftone = 0;             // the tone whose band's decay and neighbour's rise are fitted
+  int fband = 0, nband = 0;  // its band and the neighbour whose rise is fitted
+  FitWindow fw1, fw2;        // procedures 1 and 2
+};
 
-void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
-  ChainScene cs = read_chain_scene(scene);
-  const int B = scene.small_integer("bands.count");
-  const long samples = scene.small_integer("time.samples");
+TonesSetup read_setup(const SceneFile& scene) {
+  TonesSetup s;
+  ChainScene& cs = s.cs;
+  cs = read_chain_scene(scene);
+  const int B = s.B = scene.small_integer("bands.count");
+  const long samples = s.samples = scene.small_integer("time.samples");
   std::vector<double> tone_list = scene.reals("wave.tones", {});
   const std::vector<double> centre_bands = scene.reals("wave.bands", {});
-  const std::vector<double> amplitudes = scene.reals("wave.u0", {0.01, 0.001});
-  const int mapped = scene.small_integer("maps.realization", 0);
+  s.amplitudes = scene.reals("wave.u0", {0.01, 0.001});
+  s.mapped = scene.small_integer("maps.realization", 0);
   const double fit_tone = scene.real("fit.tone", -1);
   const auto w1 = scene.reals("fit.window_nonlinear", {2, 18});
   const auto w2 = scene.reals("fit.window_linear", {2, 8});
-  const int L = cs.spec.sites();
+  const int L = s.L = cs.spec.sites();
   scene.require(!cs.exact, "time.solver", "must be \"verlet\" here");
   scene.require(cs.spec.boundary == ChainBoundary::Fixed || L % 2 == 0, "chain.beads",
                 "must be even for a periodic ring");
@@ -141,18 +153,18 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
     tone_list.push_back(chain_band_tone(static_cast<int>(b), L, B));
   }
   scene.require(!tone_list.empty(), "wave.tones", "give wave.tones and/or wave.bands");
-  std::vector<int> tones;
+  std::vector<int>& tones = s.tones;
   for (double t : tone_list) {
     scene.require(t >= 1 && t <= L / 2 && t == std::floor(t), "wave.tones",
                   "must be whole wavenumbers in [1, L/2 = " + std::to_string(L / 2) + "]");
     if (std::find(tones.begin(), tones.end(), static_cast<int>(t)) == tones.end())
       tones.push_back(static_cast<int>(t));
   }
-  scene.require(!amplitudes.empty(), "wave.u0", "must list at least one amplitude");
-  scene.require_distinct("wave.u0", amplitudes);
-  for (double a : amplitudes)
+  scene.require(!s.amplitudes.empty(), "wave.u0", "must list at least one amplitude");
+  scene.require_distinct("wave.u0", s.amplitudes);
+  for (double a : s.amplitudes)
     scene.require(a > 0 && a < 0.1, "wave.u0", "must be in (0, 0.1): small against the overlap");
-  scene.require(mapped >= 0 && mapped < cs.realizations, "maps.realization",
+  scene.require(s.mapped >= 0 && s.mapped < cs.realizations, "maps.realization",
                 "must be a realization index below disorder.realizations");
   scene.require(fit_tone < 0 || std::find(tones.begin(), tones.end(), int(fit_tone)) != tones.end(),
                 "fit.tone", "must be one of the tones");
@@ -161,153 +173,178 @@ void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
                   "must be [first, last] sample indices within time.samples");
     return FitWindow{static_cast<int>(w[0]), static_cast<int>(w[1])};
   };
-  const FitWindow fw1 = window(w1, "fit.window_nonlinear"), fw2 = window(w2, "fit.window_linear");
+  s.fw1 = window(w1, "fit.window_nonlinear"), s.fw2 = window(w2, "fit.window_linear");
   scene.require_memory("time.samples", 8.0 * (samples + 1) * (2.0 * B + 3.0 * L) * tones.size() *
-                                           amplitudes.size() * cs.xis.size());
-  const long per_sample = chain_steps_per_sample(scene, cs);
+                                           s.amplitudes.size() * cs.xis.size());
+  s.per_sample = chain_steps_per_sample(scene, cs);
   scene.reject_unknown_keys();
-  if (!begin_outputs(opts)) return;
-
-  const long T = samples + 1;
-  const int N = cs.spec.beads;
   // The fits are drawn for this tone (default: the lowest tone above the fundamental band).
-  int ftone = fit_tone > 0 ? static_cast<int>(fit_tone) : tones.back();
+  s.ftone = fit_tone > 0 ? static_cast<int>(fit_tone) : tones.back();
   if (fit_tone <= 0)
     for (int t : tones)
       if (chain_band_of_bin(t, L, B) > 0) {
-        ftone = t;
+        s.ftone = t;
         break;
       }
-  const int fband = chain_band_of_bin(ftone, L, B);
-  const int nband = fband + 1 < B ? fband + 1 : fband - 1;  // the neighbour whose rise is fitted
+  s.fband = chain_band_of_bin(s.ftone, L, B);
+  s.nband = s.fband + 1 < B ? s.fband + 1 : s.fband - 1;
+  return s;
+}
 
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "chain_tones");
+// Each tone run's series in group g (/xi_<k>).
+void write_tone_runs(H5Writer& h5, const std::string& g, const TonesSetup& s,
+                     const std::vector<ToneRun>& runs) {
+  const long T = s.samples + 1;
+  const int bins = static_cast<int>(runs[0].spectrum_one.size() / T);
+  for (const ToneRun& run : runs) {
+    char name[96];
+    std::snprintf(name, sizeof name, "%s/tone_%d_u0_%g", g.c_str(), run.tone, run.u0);
+    const std::string t = name;
+    const auto TT = static_cast<hsize_t>(T);
+    const auto B = static_cast<hsize_t>(s.B), N = static_cast<hsize_t>(s.cs.spec.beads);
+    write_quantity(h5, t + "/bands_mean", run.bands_mean, "1", {B, TT});
+    write_quantity(h5, t + "/bands_one", run.bands_one, "1", {B, TT});
+    write_quantity(h5, t + "/spectrum_one", run.spectrum_one, "1",
+                   {static_cast<hsize_t>(bins), TT});
+    write_quantity(h5, t + "/u_one", run.u_one, "1", {N, TT});
+    write_quantity(h5, t + "/te_one", run.te_one, "1", {N, TT});
+    write_quantity(h5, t + "/total_mean", run.total_mean, "1");
+    h5.attribute(t, "tone", run.tone);
+    h5.attribute(t, "u0", run.u0);
+    h5.attribute(t, "band", chain_band_of_bin(run.tone, s.L, s.B));
+  }
+}
+
+// Amplitude check per tone: normalized band energies and u/u0 maps of the first and every
+// other amplitude; the energy ratio against (u0 ratio)^2.
+Json amplitude_checks(const TonesSetup& s, const std::vector<ToneRun>& runs) {
+  Json checks = Json::array();
+  const size_t A = s.amplitudes.size();
+  for (size_t ti = 0; ti < s.tones.size(); ++ti) {
+    const ToneRun& ref = runs[ti * A];
+    for (size_t a = 1; a < A; ++a) {
+      const ToneRun& run = runs[ti * A + a];
+      double dband = 0, du = 0, umax = 0;
+      for (size_t i = 0; i < ref.bands_mean.size(); ++i)
+        dband = std::max(dband, std::abs(ref.bands_mean[i] - run.bands_mean[i]));
+      for (size_t i = 0; i < ref.u_one.size(); ++i) {
+        du = std::max(du, std::abs(ref.u_one[i] / ref.u0 - run.u_one[i] / run.u0));
+        umax = std::max(umax, std::abs(ref.u_one[i] / ref.u0));
+      }
+      Json c = Json::object();
+      c["tone"] = static_cast<double>(ref.tone);
+      c["u0"] = std::vector<double>{ref.u0, run.u0};
+      c["max_abs_difference_normalized_band_energies"] = dband;
+      c["max_difference_u_over_u0_relative"] = du / umax;
+      c["energy_ratio_over_amplitude_ratio_squared"] =
+          (ref.total_mean[0] / run.total_mean[0]) / std::pow(ref.u0 / run.u0, 2);
+      checks.push(c);
+    }
+  }
+  return checks;
+}
+
+// What the fitting procedures see (first amplitude): decay of the agitated band, rise of its
+// neighbour, each with procedure 1 (exponential, long window) and 2 (linear, short); in
+// summary.json and in group g/fits.
+Json fit_views(H5Writer& h5, const std::string& g, const TonesSetup& s,
+               const std::vector<ToneRun>& runs, const std::vector<double>& times) {
+  const long T = s.samples + 1;
+  const size_t A = s.amplitudes.size();
+  const int ftone = s.ftone, fband = s.fband, nband = s.nband;
+  const ToneRun& fr =
+      runs[(std::find(s.tones.begin(), s.tones.end(), ftone) - s.tones.begin()) * A];
+  const std::vector<double> decay = row(fr.bands_mean, fband, T);
+  const std::vector<double> rise = row(fr.bands_mean, nband, T);
+  auto slice = [&](const std::vector<double>& v, FitWindow w) {
+    return std::vector<double>(v.begin() + w.first, v.begin() + w.last + 1);
+  };
+  const std::vector<double> t1 = slice(times, s.fw1), t2 = slice(times, s.fw2);
+  const ExpFit d1 = fit_decay(t1, slice(decay, s.fw1));
+  const ExpFit r1 = fit_rise(t1, slice(rise, s.fw1));
+  // Procedure 2: straight lines through (t, 1 - e_s) and (t, e_r), least squares through 0.
+  auto slope_through_origin = [](const std::vector<double>& t, const std::vector<double>& y) {
+    double ty = 0, tt = 0;
+    for (size_t i = 0; i < t.size(); ++i) ty += t[i] * y[i], tt += t[i] * t[i];
+    return ty / tt;
+  };
+  std::vector<double> loss = slice(decay, s.fw2);
+  for (double& e : loss) e = 1 - e;
+  const double x1 = slope_through_origin(t2, loss);
+  const double x2 = slope_through_origin(t2, slice(rise, s.fw2));
+  Json fit = Json::object();
+  fit["tone"] = static_cast<double>(ftone);
+  fit["agitated_band"] = static_cast<double>(fband);
+  fit["neighbour_band"] = static_cast<double>(nband);
+  fit["decay_nonlinear"] = std::vector<double>{d1.y, d1.z};  // (1 - y1) e^{-z1 t} + y1
+  fit["rise_nonlinear"] = std::vector<double>{r1.y, r1.z};   // y2 (1 - e^{-z2 t})
+  fit["Q_ss_nonlinear"] = -d1.z * (1 - d1.y);
+  fit["Q_rs_nonlinear"] = r1.y * r1.z;
+  fit["Q_ss_linear"] = -x1;
+  fit["Q_rs_linear"] = x2;
+  fit["agitated_band_energy_at_end"] = decay.back();
+  const std::string fg = g + "/fits";
+  // Normalized band energies; the fits' y are fractions and their rates z, x per t_c.
+  write_quantity(h5, fg + "/decay", decay, "1");
+  write_quantity(h5, fg + "/rise", rise, "1");
+  write_quantity(h5, fg + "/decay_nonlinear", std::vector<double>{d1.y, d1.z}, "1");
+  write_quantity(h5, fg + "/rise_nonlinear", std::vector<double>{r1.y, r1.z}, "1");
+  write_quantity(h5, fg + "/linear_slopes", std::vector<double>{x1, x2}, "1");
+  h5.attribute(fg, "tone", ftone);
+  h5.attribute(fg, "agitated_band", fband);
+  h5.attribute(fg, "neighbour_band", nband);
+  std::cout << "xi = " << s.cs.spec.xi << ": tone " << ftone << " (band " << fband << ") keeps "
+            << decay.back() << " of its energy at t = " << times.back() << "; Q_ss "
+            << -d1.z * (1 - d1.y) << " (procedure 1), " << -x1 << " (procedure 2)\n";
+  return fit;
+}
+
+}  // namespace
+
+void run_chain_tones(const SceneFile& scene, const RunOptions& opts) {
+  TonesSetup s = read_setup(scene);
+  if (!begin_outputs(opts)) return;
+  ChainScene& cs = s.cs;
+  SceneOutput output(scene, opts, "chain_tones");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json runs_json = Json::array();
   WallClock clock;
   for (size_t k = 0; k < cs.xis.size(); ++k) {
     cs.spec.xi = cs.xis[k];
     std::vector<double> times;
-    const std::vector<ToneRun> runs =
-        run_tones(cs, tones, amplitudes, B, samples, per_sample, mapped, times, opts.progress);
+    const std::vector<ToneRun> runs = run_tones(cs, s.tones, s.amplitudes, s.B, s.samples,
+                                                s.per_sample, s.mapped, times, opts.progress);
     const std::string g = "/xi_" + std::to_string(k);
     // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, displacement
     // in Delta_0, energies in F_0 Delta_0, band and spectral energies normalized by the total.
     write_quantity(h5, g + "/times", times, "1");
     h5.attribute(g, "xi", cs.spec.xi);
-    const int bins = static_cast<int>(runs[0].spectrum_one.size() / T);
-    for (const ToneRun& run : runs) {
-      char name[96];
-      std::snprintf(name, sizeof name, "%s/tone_%d_u0_%g", g.c_str(), run.tone, run.u0);
-      const std::string t = name;
-      const auto TT = static_cast<hsize_t>(T);
-      write_quantity(h5, t + "/bands_mean", run.bands_mean, "1", {static_cast<hsize_t>(B), TT});
-      write_quantity(h5, t + "/bands_one", run.bands_one, "1", {static_cast<hsize_t>(B), TT});
-      write_quantity(h5, t + "/spectrum_one", run.spectrum_one, "1",
-                     {static_cast<hsize_t>(bins), TT});
-      write_quantity(h5, t + "/u_one", run.u_one, "1", {static_cast<hsize_t>(N), TT});
-      write_quantity(h5, t + "/te_one", run.te_one, "1", {static_cast<hsize_t>(N), TT});
-      write_quantity(h5, t + "/total_mean", run.total_mean, "1");
-      h5.attribute(t, "tone", run.tone);
-      h5.attribute(t, "u0", run.u0);
-      h5.attribute(t, "band", chain_band_of_bin(run.tone, L, B));
-    }
+    write_tone_runs(h5, g, s, runs);
     Json xj = Json::object();
     xj["xi"] = cs.spec.xi;
-    // Amplitude check per tone: normalized band energies and u/u0 maps of the first and every
-    // other amplitude; the energy ratio against (u0 ratio)^2.
-    Json checks = Json::array();
-    const size_t A = amplitudes.size();
-    for (size_t ti = 0; ti < tones.size(); ++ti) {
-      const ToneRun& ref = runs[ti * A];
-      for (size_t a = 1; a < A; ++a) {
-        const ToneRun& run = runs[ti * A + a];
-        double dband = 0, du = 0, umax = 0;
-        for (size_t i = 0; i < ref.bands_mean.size(); ++i)
-          dband = std::max(dband, std::abs(ref.bands_mean[i] - run.bands_mean[i]));
-        for (size_t i = 0; i < ref.u_one.size(); ++i) {
-          du = std::max(du, std::abs(ref.u_one[i] / ref.u0 - run.u_one[i] / run.u0));
-          umax = std::max(umax, std::abs(ref.u_one[i] / ref.u0));
-        }
-        Json c = Json::object();
-        c["tone"] = static_cast<double>(ref.tone);
-        c["u0"] = std::vector<double>{ref.u0, run.u0};
-        c["max_abs_difference_normalized_band_energies"] = dband;
-        c["max_difference_u_over_u0_relative"] = du / umax;
-        c["energy_ratio_over_amplitude_ratio_squared"] =
-            (ref.total_mean[0] / run.total_mean[0]) / std::pow(ref.u0 / run.u0, 2);
-        checks.push(c);
-      }
-    }
-    xj["amplitude_check"] = checks;
-    // What the fitting procedures see (first amplitude): decay of the agitated band, rise of
-    // its neighbour, each with procedure 1 (exponential, long window) and 2 (linear, short).
-    const ToneRun& fr = runs[(std::find(tones.begin(), tones.end(), ftone) - tones.begin()) * A];
-    const std::vector<double> decay = row(fr.bands_mean, fband, T);
-    const std::vector<double> rise = row(fr.bands_mean, nband, T);
-    auto slice = [&](const std::vector<double>& v, FitWindow w) {
-      return std::vector<double>(v.begin() + w.first, v.begin() + w.last + 1);
-    };
-    const std::vector<double> t1 = slice(times, fw1), t2 = slice(times, fw2);
-    const ExpFit d1 = fit_decay(t1, slice(decay, fw1));
-    const ExpFit r1 = fit_rise(t1, slice(rise, fw1));
-    // Procedure 2: straight lines through (t, 1 - e_s) and (t, e_r), least squares through 0.
-    auto slope_through_origin = [](const std::vector<double>& t, const std::vector<double>& y) {
-      double ty = 0, tt = 0;
-      for (size_t i = 0; i < t.size(); ++i) ty += t[i] * y[i], tt += t[i] * t[i];
-      return ty / tt;
-    };
-    std::vector<double> loss = slice(decay, fw2);
-    for (double& e : loss) e = 1 - e;
-    const double x1 = slope_through_origin(t2, loss);
-    const double x2 = slope_through_origin(t2, slice(rise, fw2));
-    Json fit = Json::object();
-    fit["tone"] = static_cast<double>(ftone);
-    fit["agitated_band"] = static_cast<double>(fband);
-    fit["neighbour_band"] = static_cast<double>(nband);
-    fit["decay_nonlinear"] = std::vector<double>{d1.y, d1.z};  // (1 - y1) e^{-z1 t} + y1
-    fit["rise_nonlinear"] = std::vector<double>{r1.y, r1.z};   // y2 (1 - e^{-z2 t})
-    fit["Q_ss_nonlinear"] = -d1.z * (1 - d1.y);
-    fit["Q_rs_nonlinear"] = r1.y * r1.z;
-    fit["Q_ss_linear"] = -x1;
-    fit["Q_rs_linear"] = x2;
-    fit["agitated_band_energy_at_end"] = decay.back();
-    xj["fits"] = fit;
-    const std::string fg = g + "/fits";
-    // Normalized band energies; the fits' y are fractions and their rates z, x per t_c.
-    write_quantity(h5, fg + "/decay", decay, "1");
-    write_quantity(h5, fg + "/rise", rise, "1");
-    write_quantity(h5, fg + "/decay_nonlinear", std::vector<double>{d1.y, d1.z}, "1");
-    write_quantity(h5, fg + "/rise_nonlinear", std::vector<double>{r1.y, r1.z}, "1");
-    write_quantity(h5, fg + "/linear_slopes", std::vector<double>{x1, x2}, "1");
-    h5.attribute(fg, "tone", ftone);
-    h5.attribute(fg, "agitated_band", fband);
-    h5.attribute(fg, "neighbour_band", nband);
+    xj["amplitude_check"] = amplitude_checks(s, runs);
+    xj["fits"] = fit_views(h5, g, s, runs, times);
     runs_json.push(xj);
-    std::cout << "xi = " << cs.spec.xi << ": tone " << ftone << " (band " << fband << ") keeps "
-              << decay.back() << " of its energy at t = " << times.back() << "; Q_ss "
-              << -d1.z * (1 - d1.y) << " (procedure 1), " << -x1 << " (procedure 2)\n";
   }
-  h5.attribute("/", "bands", B);
-  h5.attribute("/", "beads", N);
-  h5.attribute("/", "sites", L);
-  h5.attribute("/", "mapped_realization", mapped);
-  h5.attribute("/", "window_nonlinear_first", fw1.first);
-  h5.attribute("/", "window_nonlinear_last", fw1.last);
-  h5.attribute("/", "window_linear_first", fw2.first);
-  h5.attribute("/", "window_linear_last", fw2.last);
-  h5.commit();
-  summary["tones"] = std::vector<double>(tones.begin(), tones.end());
+  h5.attribute("/", "bands", s.B);
+  h5.attribute("/", "beads", cs.spec.beads);
+  h5.attribute("/", "sites", s.L);
+  h5.attribute("/", "mapped_realization", s.mapped);
+  h5.attribute("/", "window_nonlinear_first", s.fw1.first);
+  h5.attribute("/", "window_nonlinear_last", s.fw1.last);
+  h5.attribute("/", "window_linear_first", s.fw2.first);
+  h5.attribute("/", "window_linear_last", s.fw2.last);
+  summary["tones"] = std::vector<double>(s.tones.begin(), s.tones.end());
   std::vector<double> tone_bands;
-  for (int t : tones) tone_bands.push_back(chain_band_of_bin(t, L, B));
+  for (int t : s.tones) tone_bands.push_back(chain_band_of_bin(t, s.L, s.B));
   summary["tone_bands"] = tone_bands;
   summary["tone_note"] =
       "u_i = u0 sin(N 2 pi i / L); tone N lies in band (N - 1) B / (L/2), so the source's "
       "N = 4r sits at the upper edge of band r - 1 and a band centre (wave.bands) mid-band";
   summary["runs"] = runs_json;
   summary["wall_seconds"] = clock.seconds();
-  write_scene_summary(opts, summary);
-  if (opts.charts) run_plot_script("chain_tones.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

@@ -9,8 +9,7 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -36,8 +35,9 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   scene.reject_unknown_keys();
 
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "hysteretic_collision");
+  SceneOutput output(scene, opts, "hysteretic_collision");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json cases = Json::array();
   const double m1 = density * M_PI / 6 * d1 * d1 * d1, m2 = density * M_PI / 6 * d2 * d2 * d2;
   const double m = m1 * m2 / (m1 + m2);
@@ -67,11 +67,8 @@ void run_hysteretic_collision(const SceneFile& scene, const RunOptions& opts) {
   }
   h5.attribute("/", "k1", k1);
   h5.attribute("/", "k2", k2);
-  h5.commit();
   summary["cases"] = cases;
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("hysteretic_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

@@ -15,9 +15,8 @@
 #include "core/run/finite.hpp"
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/materials.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -90,39 +89,32 @@ ImpactResult run_case(const Model& model, const ImpactScene& c, double speed, do
   return impact<Kokkos::DefaultExecutionSpace>(model, s);
 }
 
-}  // namespace
-
-void run_impact(const SceneFile& scene, const RunOptions& opts) {
-  const ImpactScene c = read_scene(scene);
-  if (!begin_outputs(opts)) return;
+// The pair's reduced quantities, its restitution and friction.
+struct ImpactPair {
+  double estar = 0, rstar = 0, mstar = 0, e_in = 0, mu = 0;
+};
+ImpactPair impact_pair(const ImpactScene& c) {
   const MaterialSet& mats = c.materials;
-  const double estar = mats.effective_young(c.sphere, c.target);
-  const double rstar =
-      c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
+  ImpactPair p;
+  p.estar = mats.effective_young(c.sphere, c.target);
+  p.rstar = c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
   const double m1 = mats.materials[c.sphere].density * 4.0 / 3.0 * M_PI * std::pow(c.radius, 3);
   const double m2 =
       c.wall ? 0.0
              : mats.materials[c.target].density * 4.0 / 3.0 * M_PI * std::pow(c.target_radius, 3);
-  const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
-  const double e_in = mats.restitution(c.sphere, c.target);
-  const double mu = mats.tangential
-                        ? (c.sphere == c.target ? mats.materials[c.sphere].friction
-                                                : mats.pair(mats.materials[c.sphere].friction,
-                                                            mats.materials[c.target].friction))
-                        : 0.0;
+  p.mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
+  p.e_in = mats.restitution(c.sphere, c.target);
+  p.mu = mats.tangential ? (c.sphere == c.target ? mats.materials[c.sphere].friction
+                                                 : mats.pair(mats.materials[c.sphere].friction,
+                                                             mats.materials[c.target].friction))
+                         : 0.0;
+  return p;
+}
 
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "impact");
-  summary["effective_young_modulus"] = estar;
-  summary["effective_shear_modulus"] = mats.effective_shear(c.sphere, c.target);
-  summary["reduced_radius"] = rstar;
-  summary["reduced_mass"] = mstar;
-  summary["restitution_input"] = e_in;
-  summary["friction"] = mu;
-  summary["alpha_exact"] = hertz_alpha_exact(e_in);
-  summary["alpha_common"] = hertz_alpha_common(e_in);
-
-  // 1. Head-on impacts over the speeds, with both mappings of e to the damping constant.
+// 1. Head-on impacts over the speeds, with both mappings of e to the damping constant.
+void speed_sweep(const ImpactScene& c, const ImpactPair& p, H5Writer& h5, Json& summary) {
+  const MaterialSet& mats = c.materials;
+  const double estar = p.estar, rstar = p.rstar, mstar = p.mstar, e_in = p.e_in;
   Json speeds = Json::array();
   std::vector<double> e_exact, e_common, tc_ratio;
   for (const std::string& mapping :
@@ -169,8 +161,13 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   std::cout << "restitution over speeds " << c.speeds.front() << " .. " << c.speeds.back()
             << ": input " << e_in << ", largest error exact mapping " << worst_exact
             << ", common mapping " << worst_common << "\n";
+}
 
-  // 2. Oblique impacts at one speed over the incidence angles.
+// 2. Oblique impacts at one speed over the incidence angles (with a snapshot series each).
+void oblique_sweep(const ImpactScene& c, const ImpactPair& p, const RunOptions& opts, H5Writer& h5,
+                   Json& summary) {
+  const MaterialSet& mats = c.materials;
+  const double estar = p.estar, rstar = p.rstar, mstar = p.mstar, mu = p.mu;
   const double v = c.oblique_speed;
   Json cases = Json::array();
   std::vector<double> angle, en, et, wout, rebound, jt_over_jn, cf_rebound, cf_wout, cf_et, sliding;
@@ -240,12 +237,30 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   write_quantity(h5, "/angles/closed_form_spin_out_scaled", cf_wout, "1");
   write_quantity(h5, "/angles/closed_form_rebound_angle_deg", cf_rebound, "deg");
   write_quantity(h5, "/angles/closed_form_restitution_tangential", cf_et, "1");
-  h5.attribute("/", "restitution_input", e_in);
-  h5.attribute("/", "friction", mu);
-  h5.attribute("/", "target", c.wall ? "wall" : "sphere");
-  h5.commit();
-  write_scene_summary(opts, summary);
-  if (opts.charts) run_plot_script("impact.py", opts.out_dir + "/results.h5", opts.out_dir);
+}
+
+}  // namespace
+
+void run_impact(const SceneFile& scene, const RunOptions& opts) {
+  const ImpactScene c = read_scene(scene);
+  if (!begin_outputs(opts)) return;
+  const ImpactPair p = impact_pair(c);
+  SceneOutput output(scene, opts, "impact");
+  Json& summary = output.summary();
+  summary["effective_young_modulus"] = p.estar;
+  summary["effective_shear_modulus"] = c.materials.effective_shear(c.sphere, c.target);
+  summary["reduced_radius"] = p.rstar;
+  summary["reduced_mass"] = p.mstar;
+  summary["restitution_input"] = p.e_in;
+  summary["friction"] = p.mu;
+  summary["alpha_exact"] = hertz_alpha_exact(p.e_in);
+  summary["alpha_common"] = hertz_alpha_common(p.e_in);
+  speed_sweep(c, p, output.h5(), summary);
+  oblique_sweep(c, p, opts, output.h5(), summary);
+  output.h5().attribute("/", "restitution_input", p.e_in);
+  output.h5().attribute("/", "friction", p.mu);
+  output.h5().attribute("/", "target", c.wall ? "wall" : "sphere");
+  output.finish();
 }
 
 }  // namespace granular

@@ -15,9 +15,8 @@
 #include "core/run/finite.hpp"
 #include "scenarios/collisions/impact.hpp"
 #include "scenarios/collisions/impact_closed_forms.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/materials.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -137,174 +136,194 @@ struct CaseOutput {
 
 double sphere_mass(const Material& m, double a) { return m.density * 4.0 / 3.0 * M_PI * a * a * a; }
 
+// The impact of case c at swept value x: speeds, spins and time step as the sweep sets them.
+ImpactSetup impact_setup(const BenchScene& b, const BenchCase& c, const MaterialSet& mats, double x,
+                         double mstar, double rstar) {
+  ImpactSetup s;
+  s.wall = c.wall, s.wall_material = 1;
+  s.radius1 = c.radius, s.density1 = c.sphere.density, s.species1 = 0;
+  s.radius2 = c.target_radius, s.density2 = c.target.density, s.species2 = 1;
+  // Relative normal and tangential speed of the centres, and the moving sphere's spin.
+  double vn = c.speed, vt = 0.0, spin = 0.0;
+  if (c.sweep == Sweep::Speed) vn = x;
+  if (c.sweep == Sweep::Angle)
+    vn = c.speed * std::cos(x * M_PI / 180), vt = c.speed * std::sin(x * M_PI / 180);
+  if (c.sweep == Sweep::TangentialSpeed) vt = x;
+  if (c.sweep == Sweep::Spin) spin = x;
+  s.speed = std::hypot(vn, vt), s.angle = std::atan2(vt, vn);
+  s.spin[1] = spin;
+  if (!c.wall) {
+    // The target rises towards the sphere above it: its approach adds to the relative
+    // normal speed that `speed` and `angle` describe.
+    s.target_velocity[2] = c.target_speed;
+    s.target_spin[1] = c.target_spin_ratio * spin;
+    s.speed = std::hypot(vn + c.target_speed, vt);
+    s.angle = std::atan2(vt, vn + c.target_speed);
+  }
+  const double vn_rel = s.speed * std::cos(s.angle);
+  s.dt = hertz_closed_form(mats.effective_young(0, 1), rstar, mstar, vn_rel).duration /
+         b.steps_per_contact;
+  s.dt_hint = "raise run.steps_per_contact (now " + std::to_string(b.steps_per_contact) + ")";
+  return s;
+}
+
+// The largest departures of one case's impacts from the closed forms.
+struct CaseErrors {
+  double hertz = 0, restitution = 0, sliding = 0;
+  int sliding_cases = 0;
+};
+
+// Runs case c's impact at its iv-th value: a row of o, the errors, and the first impact's
+// time series in results.h5.
+void run_impact_value(const BenchScene& b, const BenchCase& c, size_t iv, CaseOutput& o,
+                      CaseErrors& err, H5Writer& h5) {
+  const double x = c.values[iv];
+  const double m1 = sphere_mass(c.sphere, c.radius);
+  const double m2 = c.wall ? 0.0 : sphere_mass(c.target, c.target_radius);
+  const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
+  const double rstar =
+      c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
+  const MaterialSet mats = case_materials(b, c, c.sweep == Sweep::Restitution ? x : 0.0);
+  const double estar = mats.effective_young(0, 1);
+  const double e_in = mats.restitution(0, 1);
+  const double mu =
+      mats.tangential ? mats.pair(mats.materials[0].friction, mats.materials[1].friction) : 0.0;
+  ImpactSetup s = impact_setup(b, c, mats, x, mstar, rstar);
+  s.record = iv == 0;
+  ImpactResult r;
+  with_material_model(
+      mats, [&](const auto& model) { r = impact<Kokkos::DefaultExecutionSpace>(model, s); });
+  const auto hz = hertz_closed_form(estar, rstar, mstar, r.vn_in);
+  const GrossSliding g = gross_sliding(m1, c.radius, mstar, r.vn_in, r.vt_in, r.spin_in, r.vc_in,
+                                       mu, r.restitution_normal);
+  o.value.push_back(x);
+  o.vn.push_back(r.vn_in), o.vc.push_back(r.vc_in), o.spin_in.push_back(r.spin_in);
+  o.mu.push_back(mu);
+  o.e_input.push_back(e_in);
+  o.en.push_back(r.restitution_normal);
+  o.et.push_back(r.restitution_tangential);
+  o.et_centre.push_back(r.vt_in != 0 ? r.vt_out / r.vt_in : 0.0);
+  o.spin_out.push_back(r.spin_out);
+  o.rebound_deg.push_back(std::atan2(r.vc_out, r.vn_out) * 180 / M_PI);
+  o.impulse_ratio.push_back(r.impulse_normal != 0 ? -r.impulse_tangential / r.impulse_normal : 0.0);
+  o.duration.push_back(r.duration), o.overlap.push_back(r.max_overlap);
+  o.force.push_back(r.max_normal_force);
+  // Normalised incidence: the slip over what gross sliding removes in one impact.
+  o.incidence.push_back(mu > 0 ? r.vc_in / (mu * (1 + r.restitution_normal) * r.vn_in) : 0.0);
+  o.cf_duration.push_back(hz.duration), o.cf_overlap.push_back(hz.overlap);
+  o.cf_force.push_back(hz.force);
+  o.cf_slides.push_back(g.slides ? 1.0 : 0.0);
+  const double nan = std::nan("");
+  o.cf_et.push_back(g.slides ? g.restitution_tangential : nan);
+  o.cf_spin.push_back(g.slides ? g.spin1_out : nan);
+  o.cf_rebound.push_back(g.slides ? std::atan2(g.vc_out, r.vn_out) * 180 / M_PI : nan);
+  o.cf_impulse.push_back(g.slides ? g.impulse_ratio : nan);
+  if (e_in == 1.0 && r.vc_in == 0.0)
+    err.hertz = max_keep_nan(err.hertz, std::max({std::fabs(r.duration / hz.duration - 1),
+                                                  std::fabs(r.max_overlap / hz.overlap - 1),
+                                                  std::fabs(r.max_normal_force / hz.force - 1)}));
+  err.restitution = max_keep_nan(err.restitution, std::fabs(r.restitution_normal - e_in));
+  if (g.slides && mu > 0) {
+    ++err.sliding_cases;
+    err.sliding = max_keep_nan(
+        err.sliding,
+        std::max({std::fabs(o.impulse_ratio.back() / g.impulse_ratio - 1),
+                  std::fabs(r.spin_out - g.spin1_out) / std::max(std::fabs(g.spin1_out), 1e-300),
+                  std::fabs(r.restitution_tangential - g.restitution_tangential)}));
+  }
+  if (s.record) {
+    const std::string g0 = "/cases/" + c.name + "/first";
+    write_quantity(h5, g0 + "/time", r.t, "us");
+    write_quantity(h5, g0 + "/overlap", r.overlap, "mm");
+    write_quantity(h5, g0 + "/normal_force", r.force_normal, "N");
+    write_quantity(h5, g0 + "/tangential_force", r.force_tangential, "N");
+    write_quantity(h5, g0 + "/slip", r.slip, "mm us-1");
+    h5.attribute(g0, "hertz_stiffness", 4.0 / 3.0 * estar * std::sqrt(rstar));
+  }
+}
+
+const char* const kSweepNames[] = {"speed", "restitution", "angle", "tangential_speed", "spin"};
+
+// Group /cases/<name> of results.h5: one column per measured and closed-form quantity.
+void write_case_group(H5Writer& h5, const BenchCase& c, const CaseOutput& o) {
+  const std::string g = "/cases/" + c.name;
+  // The unit of `value`, the swept quantity (as read from the scene file).
+  static const char* sweep_units[] = {"mm us-1", "1", "deg", "mm us-1", "rad us-1"};
+  const std::tuple<const char*, const std::vector<double>*, const char*> columns[] = {
+      {"value", &o.value, sweep_units[static_cast<int>(c.sweep)]},
+      {"restitution_input", &o.e_input, "1"},
+      {"normal_speed", &o.vn, "mm us-1"},
+      {"slip_in", &o.vc, "mm us-1"},
+      {"spin_in", &o.spin_in, "rad us-1"},
+      {"friction", &o.mu, "1"},
+      {"restitution_normal", &o.en, "1"},
+      {"restitution_tangential", &o.et, "1"},
+      {"restitution_tangential_centre", &o.et_centre, "1"},
+      {"spin_out", &o.spin_out, "rad us-1"},
+      {"rebound_angle_deg", &o.rebound_deg, "deg"},
+      {"impulse_ratio", &o.impulse_ratio, "1"},
+      {"duration", &o.duration, "us"},
+      {"max_overlap", &o.overlap, "mm"},
+      {"max_normal_force", &o.force, "N"},
+      {"normalised_incidence", &o.incidence, "1"},
+      {"hertz_duration", &o.cf_duration, "us"},
+      {"hertz_overlap", &o.cf_overlap, "mm"},
+      {"hertz_force", &o.cf_force, "N"},
+      {"gross_sliding", &o.cf_slides, "1"},
+      {"closed_form_restitution_tangential", &o.cf_et, "1"},
+      {"closed_form_spin_out", &o.cf_spin, "rad us-1"},
+      {"closed_form_rebound_angle_deg", &o.cf_rebound, "deg"},
+      {"closed_form_impulse_ratio", &o.cf_impulse, "1"}};
+  for (const auto& [name, col, unit] : columns) write_quantity(h5, g + "/" + name, *col, unit);
+  h5.attribute(g, "test", static_cast<double>(c.test));
+  h5.attribute(g, "title", c.title);
+  h5.attribute(g, "sweep", kSweepNames[static_cast<int>(c.sweep)]);
+  h5.attribute(g, "target", c.wall ? "wall" : "sphere");
+  h5.attribute(g, "radius", c.radius);
+}
+
+// Case c in summary.json (and a line on the console).
+Json case_json(const BenchCase& c, const CaseErrors& err) {
+  const bool hertz = c.sweep == Sweep::Speed || c.sweep == Sweep::Restitution;
+  Json j = Json::object();
+  j["name"] = c.name;
+  j["test"] = c.test;
+  j["title"] = c.title;
+  j["sweep"] = kSweepNames[static_cast<int>(c.sweep)];
+  j["cases"] = static_cast<long>(c.values.size());
+  j["largest_restitution_error"] = err.restitution;
+  if (hertz) j["largest_elastic_hertz_error"] = err.hertz;
+  j["gross_sliding_cases"] = static_cast<long>(err.sliding_cases);
+  if (err.sliding_cases > 0) j["largest_gross_sliding_error"] = err.sliding;
+  std::cout << "test " << c.test << " " << c.name << ": " << c.values.size()
+            << " impacts, restitution error " << err.restitution;
+  if (hertz) std::cout << ", elastic Hertz error " << err.hertz;
+  if (err.sliding_cases > 0)
+    std::cout << ", gross sliding error " << err.sliding << " (" << err.sliding_cases
+              << " sliding)";
+  std::cout << "\n";
+  return j;
+}
+
 }  // namespace
 
 void run_impact_benchmarks(const SceneFile& scene, const RunOptions& opts) {
   const BenchScene b = read_scene(scene);
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "impact_benchmarks");
+  SceneOutput output(scene, opts, "impact_benchmarks");
+  Json& summary = output.summary();
   summary["coulomb_limit"] =
       "mu |f_n| of the total normal force (elastic + dashpot), as dem.md writes it";
   Json cases = Json::array();
-
   for (const BenchCase& c : b.cases) {
     CaseOutput o;
-    const double m1 = sphere_mass(c.sphere, c.radius);
-    const double m2 = c.wall ? 0.0 : sphere_mass(c.target, c.target_radius);
-    const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
-    const double rstar =
-        c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
-    double worst_hertz = 0, worst_e = 0, worst_sliding = 0;
-    int sliding_cases = 0;
-    for (size_t iv = 0; iv < c.values.size(); ++iv) {
-      const double x = c.values[iv];
-      const MaterialSet mats = case_materials(b, c, c.sweep == Sweep::Restitution ? x : 0.0);
-      const double estar = mats.effective_young(0, 1);
-      const double e_in = mats.restitution(0, 1);
-      const double mu =
-          mats.tangential ? mats.pair(mats.materials[0].friction, mats.materials[1].friction) : 0.0;
-      ImpactSetup s;
-      s.wall = c.wall, s.wall_material = 1;
-      s.radius1 = c.radius, s.density1 = c.sphere.density, s.species1 = 0;
-      s.radius2 = c.target_radius, s.density2 = c.target.density, s.species2 = 1;
-      // Relative normal and tangential speed of the centres, and the moving sphere's spin.
-      double vn = c.speed, vt = 0.0, spin = 0.0;
-      if (c.sweep == Sweep::Speed) vn = x;
-      if (c.sweep == Sweep::Angle)
-        vn = c.speed * std::cos(x * M_PI / 180), vt = c.speed * std::sin(x * M_PI / 180);
-      if (c.sweep == Sweep::TangentialSpeed) vt = x;
-      if (c.sweep == Sweep::Spin) spin = x;
-      s.speed = std::hypot(vn, vt), s.angle = std::atan2(vt, vn);
-      s.spin[1] = spin;
-      if (!c.wall) {
-        // The target rises towards the sphere above it: its approach adds to the relative
-        // normal speed that `speed` and `angle` describe.
-        s.target_velocity[2] = c.target_speed;
-        s.target_spin[1] = c.target_spin_ratio * spin;
-        s.speed = std::hypot(vn + c.target_speed, vt);
-        s.angle = std::atan2(vt, vn + c.target_speed);
-      }
-      const double vn_rel = s.speed * std::cos(s.angle);
-      s.dt = hertz_closed_form(estar, rstar, mstar, vn_rel).duration / b.steps_per_contact;
-      s.dt_hint = "raise run.steps_per_contact (now " + std::to_string(b.steps_per_contact) + ")";
-      s.record = iv == 0;
-      ImpactResult r;
-      with_material_model(
-          mats, [&](const auto& model) { r = impact<Kokkos::DefaultExecutionSpace>(model, s); });
-      const auto hz = hertz_closed_form(estar, rstar, mstar, r.vn_in);
-      const GrossSliding g = gross_sliding(m1, c.radius, mstar, r.vn_in, r.vt_in, r.spin_in,
-                                           r.vc_in, mu, r.restitution_normal);
-      o.value.push_back(x);
-      o.vn.push_back(r.vn_in), o.vc.push_back(r.vc_in), o.spin_in.push_back(r.spin_in);
-      o.mu.push_back(mu);
-      o.e_input.push_back(e_in);
-      o.en.push_back(r.restitution_normal);
-      o.et.push_back(r.restitution_tangential);
-      o.et_centre.push_back(r.vt_in != 0 ? r.vt_out / r.vt_in : 0.0);
-      o.spin_out.push_back(r.spin_out);
-      o.rebound_deg.push_back(std::atan2(r.vc_out, r.vn_out) * 180 / M_PI);
-      o.impulse_ratio.push_back(r.impulse_normal != 0 ? -r.impulse_tangential / r.impulse_normal
-                                                      : 0.0);
-      o.duration.push_back(r.duration), o.overlap.push_back(r.max_overlap);
-      o.force.push_back(r.max_normal_force);
-      // Normalised incidence: the slip over what gross sliding removes in one impact.
-      o.incidence.push_back(mu > 0 ? r.vc_in / (mu * (1 + r.restitution_normal) * r.vn_in) : 0.0);
-      o.cf_duration.push_back(hz.duration), o.cf_overlap.push_back(hz.overlap);
-      o.cf_force.push_back(hz.force);
-      o.cf_slides.push_back(g.slides ? 1.0 : 0.0);
-      const double nan = std::nan("");
-      o.cf_et.push_back(g.slides ? g.restitution_tangential : nan);
-      o.cf_spin.push_back(g.slides ? g.spin1_out : nan);
-      o.cf_rebound.push_back(g.slides ? std::atan2(g.vc_out, r.vn_out) * 180 / M_PI : nan);
-      o.cf_impulse.push_back(g.slides ? g.impulse_ratio : nan);
-      if (e_in == 1.0 && r.vc_in == 0.0)
-        worst_hertz =
-            max_keep_nan(worst_hertz, std::max({std::fabs(r.duration / hz.duration - 1),
-                                                std::fabs(r.max_overlap / hz.overlap - 1),
-                                                std::fabs(r.max_normal_force / hz.force - 1)}));
-      worst_e = max_keep_nan(worst_e, std::fabs(r.restitution_normal - e_in));
-      if (g.slides && mu > 0) {
-        ++sliding_cases;
-        worst_sliding = max_keep_nan(
-            worst_sliding,
-            std::max(
-                {std::fabs(o.impulse_ratio.back() / g.impulse_ratio - 1),
-                 std::fabs(r.spin_out - g.spin1_out) / std::max(std::fabs(g.spin1_out), 1e-300),
-                 std::fabs(r.restitution_tangential - g.restitution_tangential)}));
-      }
-      if (s.record) {
-        const std::string g0 = "/cases/" + c.name + "/first";
-        write_quantity(h5, g0 + "/time", r.t, "us");
-        write_quantity(h5, g0 + "/overlap", r.overlap, "mm");
-        write_quantity(h5, g0 + "/normal_force", r.force_normal, "N");
-        write_quantity(h5, g0 + "/tangential_force", r.force_tangential, "N");
-        write_quantity(h5, g0 + "/slip", r.slip, "mm us-1");
-        h5.attribute(g0, "hertz_stiffness", 4.0 / 3.0 * estar * std::sqrt(rstar));
-      }
-    }
-    const std::string g = "/cases/" + c.name;
-    // The unit of `value`, the swept quantity (as read from the scene file).
-    static const char* sweep_units[] = {"mm us-1", "1", "deg", "mm us-1", "rad us-1"};
-    const std::tuple<const char*, const std::vector<double>*, const char*> columns[] = {
-        {"value", &o.value, sweep_units[static_cast<int>(c.sweep)]},
-        {"restitution_input", &o.e_input, "1"},
-        {"normal_speed", &o.vn, "mm us-1"},
-        {"slip_in", &o.vc, "mm us-1"},
-        {"spin_in", &o.spin_in, "rad us-1"},
-        {"friction", &o.mu, "1"},
-        {"restitution_normal", &o.en, "1"},
-        {"restitution_tangential", &o.et, "1"},
-        {"restitution_tangential_centre", &o.et_centre, "1"},
-        {"spin_out", &o.spin_out, "rad us-1"},
-        {"rebound_angle_deg", &o.rebound_deg, "deg"},
-        {"impulse_ratio", &o.impulse_ratio, "1"},
-        {"duration", &o.duration, "us"},
-        {"max_overlap", &o.overlap, "mm"},
-        {"max_normal_force", &o.force, "N"},
-        {"normalised_incidence", &o.incidence, "1"},
-        {"hertz_duration", &o.cf_duration, "us"},
-        {"hertz_overlap", &o.cf_overlap, "mm"},
-        {"hertz_force", &o.cf_force, "N"},
-        {"gross_sliding", &o.cf_slides, "1"},
-        {"closed_form_restitution_tangential", &o.cf_et, "1"},
-        {"closed_form_spin_out", &o.cf_spin, "rad us-1"},
-        {"closed_form_rebound_angle_deg", &o.cf_rebound, "deg"},
-        {"closed_form_impulse_ratio", &o.cf_impulse, "1"}};
-    for (const auto& [name, col, unit] : columns) write_quantity(h5, g + "/" + name, *col, unit);
-    static const char* sweep_names[] = {"speed", "restitution", "angle", "tangential_speed",
-                                        "spin"};
-    h5.attribute(g, "test", static_cast<double>(c.test));
-    h5.attribute(g, "title", c.title);
-    h5.attribute(g, "sweep", sweep_names[static_cast<int>(c.sweep)]);
-    h5.attribute(g, "target", c.wall ? "wall" : "sphere");
-    h5.attribute(g, "radius", c.radius);
-    Json j = Json::object();
-    j["name"] = c.name;
-    j["test"] = c.test;
-    j["title"] = c.title;
-    j["sweep"] = sweep_names[static_cast<int>(c.sweep)];
-    j["cases"] = static_cast<long>(c.values.size());
-    j["largest_restitution_error"] = worst_e;
-    if (c.sweep == Sweep::Speed || c.sweep == Sweep::Restitution)
-      j["largest_elastic_hertz_error"] = worst_hertz;
-    j["gross_sliding_cases"] = static_cast<long>(sliding_cases);
-    if (sliding_cases > 0) j["largest_gross_sliding_error"] = worst_sliding;
-    cases.push(j);
-    std::cout << "test " << c.test << " " << c.name << ": " << c.values.size()
-              << " impacts, restitution error " << worst_e;
-    if (c.sweep == Sweep::Speed || c.sweep == Sweep::Restitution)
-      std::cout << ", elastic Hertz error " << worst_hertz;
-    if (sliding_cases > 0)
-      std::cout << ", gross sliding error " << worst_sliding << " (" << sliding_cases
-                << " sliding)";
-    std::cout << "\n";
+    CaseErrors err;
+    for (size_t iv = 0; iv < c.values.size(); ++iv) run_impact_value(b, c, iv, o, err, output.h5());
+    write_case_group(output.h5(), c, o);
+    cases.push(case_json(c, err));
   }
   summary["cases"] = cases;
-  write_scene_summary(opts, summary);
-  h5.commit();
-  if (opts.charts)
-    run_plot_script("impact_benchmarks.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

@@ -7,8 +7,7 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -40,8 +39,9 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   }
 
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "two_particle_linear");
+  SceneOutput output(scene, opts, "two_particle_linear");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json cases = Json::array();
   std::vector<double> mass_ratio, speed, tc_meas, tc_closed, e_meas, e_closed;
   double worst_tc = 0, worst_e = 0, worst_p = 0;
@@ -93,14 +93,11 @@ void run_two_particle_linear(const SceneFile& scene, const RunOptions& opts) {
   write_quantity(h5, "/table/contact_duration_closed_form", tc_closed, "us");
   write_quantity(h5, "/table/restitution", e_meas, "1");
   write_quantity(h5, "/table/restitution_closed_form", e_closed, "1");
-  h5.commit();
   summary["cases"] = cases;
   summary["max_rel_error_contact_duration"] = worst_tc;
   summary["max_rel_error_restitution"] = worst_e;
   summary["max_rel_momentum_change"] = worst_p;
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("two_particle_linear.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

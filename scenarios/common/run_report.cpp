@@ -53,6 +53,7 @@ std::string cpu_model() {
 struct ActiveRun {
   bool on = false;
   bool summary_written = false;  // the driver wrote its summary.json (its results are whole)
+  bool outputs_begun = false;    // the driver passed begin_outputs: it writes into dir
   std::string dir, scene, scene_file;
   std::chrono::steady_clock::time_point start, last_report;
   std::vector<std::string> earlier_parts;  // records of the parts before this one (--resume)
@@ -64,25 +65,6 @@ ActiveRun& active_run() {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// What identifies one version of the output folder, to tell whether the run wrote anything.
-struct FileStamp {
-  bool exists = false;
-  fs::file_time_type time{};
-  std::uintmax_t size = 0;
-  bool operator==(const FileStamp& o) const {
-    return exists == o.exists && time == o.time && size == o.size;
-  }
-};
-FileStamp stamp(const std::string& path) {
-  FileStamp s;
-  std::error_code ec;
-  s.time = fs::last_write_time(path, ec);
-  if (ec) return s;
-  s.size = fs::is_directory(path, ec) ? 0 : fs::file_size(path, ec);
-  s.exists = !ec;
-  return s;
 }
 
 // A run continued with --resume is made of parts. Each part that ends before the run's end
@@ -208,13 +190,12 @@ bool write_report(const std::string& dir, const Json& run) {
 }
 
 void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts) {
-  // Every output file is renamed into place, which changes the folder's time: a run that
-  // leaves it unchanged wrote nothing (refused input, a check of the scene file) and gets
-  // no report, so an earlier run's report stays as it was.
-  const FileStamp folder_before = stamp(opts.out_dir);
+  // A run that never reaches begin_outputs wrote nothing (refused input, a check of the scene
+  // file) and gets no report, so an earlier run's report stays as it was.
   ActiveRun& run = active_run();
   run.on = true;
   run.summary_written = false;
+  run.outputs_begun = false;
   run.dir = opts.out_dir;
   run.scene = entry.name;
   run.scene_file = scene.path();
@@ -225,7 +206,7 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
   run.earlier_parts = opts.resume ? read_parts(opts.out_dir) : std::vector<std::string>{};
   auto finish = [&](const std::string& status, const std::string& message) {
     run.on = false;
-    if (!fs::is_directory(opts.out_dir) || stamp(opts.out_dir) == folder_before) return;
+    if (!run.outputs_begun || !fs::is_directory(opts.out_dir)) return;
     const double wall = seconds_since(run.start);
     Json rec = run_record(wall, status, message);
     rec["scene"] = run.scene;
@@ -265,6 +246,11 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
            "the run stopped before its end (a checkpoint is kept): continue it with --resume");
   else
     finish("complete", "");
+}
+
+void note_outputs_begun(const RunOptions& opts) {
+  ActiveRun& run = active_run();
+  if (run.on && run.dir == opts.out_dir) run.outputs_begun = true;
 }
 
 void report_progress(const std::string& status) {

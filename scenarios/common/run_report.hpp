@@ -38,6 +38,10 @@ bool write_report(const std::string& dir, const Json& run);
 // report. A run that stops early (a checkpoint, a failure) still gets a report saying so.
 void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions& opts);
 
+// Called by begin_outputs: the run in progress writes into its folder from here on, so it
+// ends with a report, whatever stops it.
+void note_outputs_begun(const RunOptions& opts);
+
 // For long studies: rewrites the report of the run in progress with `status` (a stage just
 // finished), at most once every few seconds. Does nothing outside run_scene (tests calling
 // a driver directly).

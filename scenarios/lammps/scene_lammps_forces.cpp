@@ -15,8 +15,7 @@
 #include "core/lammps/lammps_dump.hpp"
 #include "core/lammps/lammps_forces.hpp"
 #include "core/run/error.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
 namespace granular {
@@ -150,8 +149,8 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   if (!begin_outputs(opts)) return;
   LammpsForceField& ff = *field;
 
-  const auto t0 = std::chrono::steady_clock::now();
-  H5Writer h5(opts.out_dir + "/results.h5");
+  SceneOutput output(scene, opts, "lammps_forces");
+  H5Writer& h5 = output.h5();
   Json states = Json::array();
   auto record = [&] {
     check_finite(ff);
@@ -181,9 +180,8 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "atoms", static_cast<double>(ff.size()));
   h5.attribute("/", "volume", ff.box.volume());
   h5.attribute("/", "pair_style", model.describe());
-  h5.commit();
 
-  Json summary = scene_summary(scene, "lammps_forces");
+  Json& summary = output.summary();
   Json choices = Json::object();
   choices["pair_style"] = model.describe();
   choices["box"] = data.triclinic() ? "triclinic" : "orthogonal";
@@ -196,10 +194,7 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
   summary["choices"] = choices;
   summary["atoms"] = ff.size();
   summary["states"] = states;
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  summary["run"] = run_record(wall, "complete", "");
-  write_scene_summary(opts, summary);
-  if (opts.charts) run_plot_script("lammps_forces.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
   std::cout << "lammps_forces: " << ff.size() << " atoms, " << model.describe() << ", " << steps
             << " steps; outputs in " << opts.out_dir << "\n";
 }

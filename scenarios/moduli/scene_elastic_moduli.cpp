@@ -25,12 +25,11 @@
 #include "core/run/ensemble.hpp"
 #include "core/run/finite.hpp"
 #include "core/run/progress.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/moduli/jamming_point.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/moduli_preparation.hpp"
@@ -141,12 +140,12 @@ ModuliUnits elastic_moduli_units() {
     u.sweep[k] = "1";
   return u;
 }
-}  // namespace
 
-void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
-  const Setup s = read_setup(scene);
-  check_first_system(scene, opts, [&] {  // each variant's gas and laws, as prepare() builds
-    if (!s.start_from.empty()) return;   // them (a saved configuration is probed as it is)
+// In check mode, builds each variant's first systems as prepare() builds them (a saved
+// configuration is probed as it is), so that the run's guards apply to `granular check`.
+void check_variants(const SceneFile& scene, const RunOptions& opts, const Setup& s) {
+  check_first_system(scene, opts, [&] {
+    if (!s.start_from.empty()) return;
     with_contact_model(s.contact, [&](const auto& model) {
       using System = DemSystem<Exec, std::decay_t<decltype(model)>>;
       for (const PrepVariant& v : s.variants) {
@@ -162,133 +161,198 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
       }
     });
   });
-  if (s.start_from.empty()) require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
-  if (!begin_outputs(opts)) return;
-  Json summary = scene_summary(scene, "elastic_moduli");
-  Outputs out;
-  // Finished preparation variants are checkpointed here; a fresh run starts without them.
-  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
-  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
+}
 
-  bool stopped = false;
-  // Over several ranks each runs its share of the variants and rank 0 reads every part back
-  // in variant order; one rank runs them all, in order, as parts of a single process.
-  const bool spread = ensemble::size() > 1;
-  std::vector<std::string> names;
-  for (const PrepVariant& v : s.variants)
-    names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
-                    (v.tag.empty() ? "" : "_" + v.tag));
-  const StudyDeal deal =
-      s.start_from.empty() ? deal_study_units(parts, names, fingerprint, opts.resume) : StudyDeal{};
-  std::vector<std::string> ran, configs_written;
-  with_contact_model(s.contact, [&](const auto& model) {
-    using Model = std::decay_t<decltype(model)>;
-    if (!s.start_from.empty()) {
-      const ConfigState c = s.start_packing ? *s.start_packing : read_config(s.start_from);
-      std::cerr << "probing the " << (s.start_packing ? "packing " : "saved configuration ")
-                << s.start_from << " (phi " << c.phi << ")\n";
-      if (!ensemble::root()) return;  // one configuration: rank 0 probes it
-      analyse(s, c, model,
-              {{"mu_preparation", kNaN},
-               {"seed", kNaN},
-               {"ekin_over_epot", kNaN},
-               {"inertial_number_preparation", kNaN},
-               {"phi_target", kNaN}},
-              "", out);
-      out.add_config(s.start_from);
-      return;
-    }
-    // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
-    // branch only) and one per saved configuration.
-    const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
-    size_t units_here = 0;  // this rank's variants and those taken from checkpoints
-    for (size_t k = 0; k < s.variants.size(); ++k) units_here += deal.done[k] || deal.mine(k);
-    Progress progress("preparation", static_cast<long>(units_here * steps), opts.progress);
-    long done = 0, prepared = 0, stages_run = 0;
-    const auto start = std::chrono::steady_clock::now();
-    auto out_of_time = [&] {
-      const double minutes =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
-      return opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes;
-    };
-    const std::function<bool()> stop = [&] {
-      ++stages_run;
-      return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
-    };
-    for (const PrepVariant& v : s.variants) {
-      const size_t unit = static_cast<size_t>(&v - s.variants.data());
-      const std::string& part_name = names[unit];
-      Outputs part;
-      if (deal.done[unit]) {
-        std::cerr << ensemble::prefix() << "variant " << (v.tag.empty() ? part_name : v.tag)
-                  << ": taken from the checkpoint in " << parts << "\n";
-        if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) out.append(part);
-        progress.update(done += static_cast<long>(steps));
-        continue;
-      }
-      if (!deal.mine(unit)) continue;
-      if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
-          (prepared > 0 && out_of_time())) {
-        std::cerr << "stopped after " << prepared
-                  << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
-                     "--resume\n";
-        stopped = true;
-        return;
-      }
-      ++prepared;
-      const Model prep = preparation_model(model, v);
-      const double kc = std::isnan(v.kc)
-                            ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0)
-                            : v.kc;
-      const double mu = std::isnan(v.mu)
-                            ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
-                            : v.mu;
-      const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
-      make_directories(dir);
-      std::vector<double> targets = s.targets;
-      const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
-      const Setup sv = for_variant(s, v);
-      const bool finished = prepare(sv, unit, prep, part, progress, done, ck, stop,
-                                    [&](const ConfigState& c, double ratio, double I) {
-                                      // The target this configuration was saved at (the closest
-                                      // listed value).
-                                      double target = targets[0];
-                                      for (double t : targets)
-                                        if (std::fabs(t - c.phi) < std::fabs(target - c.phi))
-                                          target = t;
-                                      char name[64];
-                                      std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
-                                      write_config(dir + name, c);
-                                      part.add_config(dir + name);
-                                      analyse(sv, c, prep,
-                                              {{"mu_preparation", mu},
-                                               {"kc_preparation", kc},
-                                               {"seed", static_cast<double>(v.seed)},
-                                               {"ekin_over_epot", ratio},
-                                               {"inertial_number_preparation", I},
-                                               {"phi_target", target}},
-                                              v.tag, part);
-                                    });
-      ran.push_back(part_name);
-      configs_written.insert(configs_written.end(), part.config_paths.begin(),
-                             part.config_paths.end());
-      if (!finished) {
-        std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
-                     "continue with --resume\n";
-        stopped = true;
-        return;
-      }
-      if (!spread) out.append(part);  // prepare() saved it as the variant's checkpoint
-    }
-  });
-
-  if (spread && s.start_from.empty())
-    stopped = gather_study_units(parts, names, ran, configs_written, fingerprint, stopped, out);
+// Probes the packing or saved configuration of [start] from: one configuration, which rank 0
+// probes.
+template <class Model>
+void probe_start(const Setup& s, const Model& model, Outputs& out) {
+  const ConfigState c = s.start_packing ? *s.start_packing : read_config(s.start_from);
+  std::cerr << "probing the " << (s.start_packing ? "packing " : "saved configuration ")
+            << s.start_from << " (phi " << c.phi << ")\n";
   if (!ensemble::root()) return;
-  if (stopped) return;  // the checkpoints in variants/ are the output so far
-  H5Writer h5(opts.out_dir + "/results.h5");
-  out.write_results(h5, elastic_moduli_units());
-  h5.commit();
+  analyse(s, c, model,
+          {{"mu_preparation", kNaN},
+           {"seed", kNaN},
+           {"ekin_over_epot", kNaN},
+           {"inertial_number_preparation", kNaN},
+           {"phi_target", kNaN}},
+          "", out);
+  out.add_config(s.start_from);
+}
+
+// The checkpoint parts of a study: their folder, the fingerprint of the parameters they were
+// made with, one name per variant, and which variants are done or this rank's.
+struct StudyParts {
+  std::string parts, fingerprint;
+  std::vector<std::string> names;
+  StudyDeal deal;
+};
+
+// Prepares and probes this rank's variants, each saved as a checkpoint part; those a resumed
+// run finds done are taken from their parts. False when the run stopped part-way (a stage
+// budget, --stop-after-minutes): the checkpoints are its output so far.
+template <class Model>
+bool run_variants(const Setup& s, const Model& model, const RunOptions& opts,
+                  const StudyParts& study, Outputs& out, std::vector<std::string>& ran,
+                  std::vector<std::string>& configs_written) {
+  const std::string& parts = study.parts;
+  const std::string& fingerprint = study.fingerprint;
+  const std::vector<std::string>& names = study.names;
+  const StudyDeal& deal = study.deal;
+  const bool spread = ensemble::size() > 1;
+  // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
+  // branch only) and one per saved configuration.
+  const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
+  size_t units_here = 0;  // this rank's variants and those taken from checkpoints
+  for (size_t k = 0; k < s.variants.size(); ++k) units_here += deal.done[k] || deal.mine(k);
+  Progress progress("preparation", static_cast<long>(units_here * steps), opts.progress);
+  long done = 0, prepared = 0, stages_run = 0;
+  const auto start = std::chrono::steady_clock::now();
+  auto out_of_time = [&] {
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+    return opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes;
+  };
+  const std::function<bool()> stop = [&] {
+    ++stages_run;
+    return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
+  };
+  for (const PrepVariant& v : s.variants) {
+    const size_t unit = static_cast<size_t>(&v - s.variants.data());
+    const std::string& part_name = names[unit];
+    Outputs part;
+    if (deal.done[unit]) {
+      std::cerr << ensemble::prefix() << "variant " << (v.tag.empty() ? part_name : v.tag)
+                << ": taken from the checkpoint in " << parts << "\n";
+      if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) out.append(part);
+      progress.update(done += static_cast<long>(steps));
+      continue;
+    }
+    if (!deal.mine(unit)) continue;
+    if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
+        (prepared > 0 && out_of_time())) {
+      std::cerr << "stopped after " << prepared
+                << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
+                   "--resume\n";
+      return false;
+    }
+    ++prepared;
+    const Model prep = preparation_model(model, v);
+    const double kc = std::isnan(v.kc)
+                          ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0)
+                          : v.kc;
+    const double mu = std::isnan(v.mu)
+                          ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
+                          : v.mu;
+    const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
+    make_directories(dir);
+    std::vector<double> targets = s.targets;
+    const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
+    const Setup sv = for_variant(s, v);
+    const bool finished = prepare(sv, unit, prep, part, progress, done, ck, stop,
+                                  [&](const ConfigState& c, double ratio, double I) {
+                                    // The target this configuration was saved at (the closest
+                                    // listed value).
+                                    double target = targets[0];
+                                    for (double t : targets)
+                                      if (std::fabs(t - c.phi) < std::fabs(target - c.phi))
+                                        target = t;
+                                    char name[64];
+                                    std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
+                                    write_config(dir + name, c);
+                                    part.add_config(dir + name);
+                                    analyse(sv, c, prep,
+                                            {{"mu_preparation", mu},
+                                             {"kc_preparation", kc},
+                                             {"seed", static_cast<double>(v.seed)},
+                                             {"ekin_over_epot", ratio},
+                                             {"inertial_number_preparation", I},
+                                             {"phi_target", target}},
+                                            v.tag, part);
+                                  });
+    ran.push_back(part_name);
+    configs_written.insert(configs_written.end(), part.config_paths.begin(),
+                           part.config_paths.end());
+    if (!finished) {
+      std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
+                   "continue with --resume\n";
+      return false;
+    }
+    if (!spread) out.append(part);  // prepare() saved it as the variant's checkpoint
+  }
+  return true;
+}
+
+// Jamming density per preparation variant from its unloading series.
+Json jamming_json(const Setup& s, const Outputs& out) {
+  // Jamming density per preparation variant from its unloading series.
+  const bool hertz = s.contact.normal == "hertz";
+  Json jam = Json::array();
+  for (const JammingPoint& j :
+       jamming_points(out.prep, hertz ? "pressure" : "pressure_star", hertz ? 1.5 : 1.0,
+                      s.jamming_p_max > 0 ? s.jamming_p_max : -1)) {
+    Json e = Json::object();
+    const PrepVariant& v = s.variants.at(j.variant);
+    e["variant"] = j.variant;
+    if (!v.tag.empty()) e["tag"] = v.tag;
+    e["mu_preparation"] = std::isnan(v.mu) ? Json() : Json(v.mu);
+    if (!std::isnan(v.kc)) e["kc_preparation"] = v.kc;
+    if (!std::isnan(v.dt)) e["dt"] = v.dt;
+    e["particles"] = v.count;
+    e["fit_points"] = j.points;
+    e["phi_J"] = std::isnan(j.phi_j) ? Json() : Json(j.phi_j);
+    e["phi_J_stderr"] = std::isnan(j.phi_j_stderr) ? Json() : Json(j.phi_j_stderr);
+    e["phi_lowest_jammed"] = std::isnan(j.phi_lowest_jammed) ? Json() : Json(j.phi_lowest_jammed);
+    e["phi_highest_unjammed"] =
+        std::isnan(j.phi_highest_unjammed) ? Json() : Json(j.phi_highest_unjammed);
+    jam.push(e);
+  }
+  return jam;
+}
+
+// Largest relative change of K, G, M over all configurations when the probing amplitude or
+// rate is halved: the elastic-plateau criterion is < 1 %. Configurations below jamming have
+// no elastic plateau.
+Json halving_json(const Outputs& out) {
+  double worst_a = 0, worst_r = 0;
+  const auto& jammed = out.table.at("jammed");
+  for (const char* m : {"K", "G", "M"}) {
+    const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
+    const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
+    for (size_t i = 0; i < jammed.size(); ++i)
+      if (jammed[i] > 0)  // a NaN change is kept: it fails the check and stops the summary
+        worst_a = max_keep_nan(worst_a, a[i]), worst_r = max_keep_nan(worst_r, r[i]);
+  }
+  Json hc = Json::object();
+  hc["max_rel_change_half_amplitude"] = worst_a;
+  hc["max_rel_change_half_rate"] = worst_r;
+  hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
+  hc["unjammed_configurations_left_out"] =
+      static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
+  return hc;
+}
+
+// Scatter of the moduli over seeds at each size and target (system-size study).
+Json size_scatter_json(const std::vector<SizeScatter>& scatter) {
+  bool several_mu = false;
+  const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  for (const SizeScatter& e : scatter) several_mu = several_mu || !same(e.mu, scatter[0].mu);
+  Json sc = Json::array();
+  for (const SizeScatter& e : scatter) {
+    Json j = Json::object();
+    if (several_mu) j["mu_preparation"] = e.mu;
+    j["particles"] = e.particles, j["phi_target"] = e.phi_target;
+    j["samples"] = static_cast<double>(e.samples);
+    j["K_star_mean"] = e.K_mean, j["K_star_std"] = e.K_std;
+    j["G_star_mean"] = e.G_mean, j["G_star_std"] = e.G_std;
+    sc.push(j);
+  }
+  return sc;
+}
+
+// What the study adds to summary.json after its results.
+void write_study_summary(const Setup& s, const Outputs& out, Json& summary) {
   summary["configurations"] = out.configs;
   // The configurations are large restartable files the run regenerates; a summary kept as a
   // reference output travels without them, and says so.
@@ -305,29 +369,7 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
         "(probe strain and relaxation, the relaxation cap) was rescaled to span the same "
         "physical time as with run.dt, so the rates and durations are the same for all";
   if (!s.loading_branch) {
-    // Jamming density per preparation variant from its unloading series.
-    const bool hertz = s.contact.normal == "hertz";
-    Json jam = Json::array();
-    for (const JammingPoint& j :
-         jamming_points(out.prep, hertz ? "pressure" : "pressure_star", hertz ? 1.5 : 1.0,
-                        s.jamming_p_max > 0 ? s.jamming_p_max : -1)) {
-      Json e = Json::object();
-      const PrepVariant& v = s.variants.at(j.variant);
-      e["variant"] = j.variant;
-      if (!v.tag.empty()) e["tag"] = v.tag;
-      e["mu_preparation"] = std::isnan(v.mu) ? Json() : Json(v.mu);
-      if (!std::isnan(v.kc)) e["kc_preparation"] = v.kc;
-      if (!std::isnan(v.dt)) e["dt"] = v.dt;
-      e["particles"] = v.count;
-      e["fit_points"] = j.points;
-      e["phi_J"] = std::isnan(j.phi_j) ? Json() : Json(j.phi_j);
-      e["phi_J_stderr"] = std::isnan(j.phi_j_stderr) ? Json() : Json(j.phi_j_stderr);
-      e["phi_lowest_jammed"] = std::isnan(j.phi_lowest_jammed) ? Json() : Json(j.phi_lowest_jammed);
-      e["phi_highest_unjammed"] =
-          std::isnan(j.phi_highest_unjammed) ? Json() : Json(j.phi_highest_unjammed);
-      jam.push(e);
-    }
-    summary["jamming"] = jam;
+    summary["jamming"] = jamming_json(s, out);
     summary["jamming_note"] =
         "phi_J: root of the straight line P^(1/alpha) against phi (alpha = 1 linear, 3/2 Hertz) "
         "fitted to the unloading samples with 0 < P <= preparation.jamming_fit_pressure_max; "
@@ -338,48 +380,50 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   // Amplitude sweeps and reversibility tests, one entry per configuration (the columns say
   // which: "amplitude" or "prestrain").
   if (!s.amplitudes.empty() || !s.prestrains.empty()) summary["amplitude_sweeps"] = out.sweeps;
-  if (s.halving) {
-    // Largest relative change of K, G, M over all configurations when the probing
-    // amplitude or rate is halved: the elastic-plateau criterion is < 1 %.
-    // Configurations below jamming have no elastic plateau.
-    double worst_a = 0, worst_r = 0;
-    const auto& jammed = out.table.at("jammed");
-    for (const char* m : {"K", "G", "M"}) {
-      const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
-      const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
-      for (size_t i = 0; i < jammed.size(); ++i)
-        if (jammed[i] > 0)  // a NaN change is kept: it fails the check and stops the summary
-          worst_a = max_keep_nan(worst_a, a[i]), worst_r = max_keep_nan(worst_r, r[i]);
-    }
-    Json& hc = summary["halving_check"];
-    hc = Json::object();
-    hc["max_rel_change_half_amplitude"] = worst_a;
-    hc["max_rel_change_half_rate"] = worst_r;
-    hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
-    hc["unjammed_configurations_left_out"] =
-        static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
-  }
-  // Scatter of the moduli over seeds at each size and target (system-size study).
+  if (s.halving) summary["halving_check"] = halving_json(out);
   const std::vector<SizeScatter> scatter = size_scatter(out.table);
-  if (!scatter.empty()) {
-    bool several_mu = false;
-    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
-    for (const SizeScatter& e : scatter) several_mu = several_mu || !same(e.mu, scatter[0].mu);
-    Json sc = Json::array();
-    for (const SizeScatter& e : scatter) {
-      Json j = Json::object();
-      if (several_mu) j["mu_preparation"] = e.mu;
-      j["particles"] = e.particles, j["phi_target"] = e.phi_target;
-      j["samples"] = static_cast<double>(e.samples);
-      j["K_star_mean"] = e.K_mean, j["K_star_std"] = e.K_std;
-      j["G_star_mean"] = e.G_mean, j["G_star_std"] = e.G_std;
-      sc.push(j);
+  if (!scatter.empty()) summary["size_scatter"] = size_scatter_json(scatter);
+}
+
+}  // namespace
+
+void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup s = read_setup(scene);
+  check_variants(scene, opts, s);
+  if (s.start_from.empty()) require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
+  if (!begin_outputs(opts)) return;
+  SceneOutput output(scene, opts, "elastic_moduli");
+  output.summary();  // lists the keys read so far
+  Outputs out;
+  // Finished preparation variants are checkpointed here; a fresh run starts without them.
+  StudyParts study;
+  study.parts = open_study_checkpoints(opts.out_dir, opts.resume);
+  study.fingerprint = moduli_parameters_fingerprint(scene.used());
+  // Over several ranks each runs its share of the variants and rank 0 reads every part back
+  // in variant order; one rank runs them all, in order, as parts of a single process.
+  const bool spread = ensemble::size() > 1;
+  for (const PrepVariant& v : s.variants)
+    study.names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
+                          (v.tag.empty() ? "" : "_" + v.tag));
+  if (s.start_from.empty())
+    study.deal = deal_study_units(study.parts, study.names, study.fingerprint, opts.resume);
+  bool stopped = false;
+  std::vector<std::string> ran, configs_written;
+  with_contact_model(s.contact, [&](const auto& model) {
+    if (!s.start_from.empty()) {
+      probe_start(s, model, out);
+    } else {
+      stopped = !run_variants(s, model, opts, study, out, ran, configs_written);
     }
-    summary["size_scatter"] = sc;
-  }
-  write_scene_summary(opts, summary, {"table"});
-  remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
-  if (opts.charts) run_plot_script("elastic_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
+  });
+  if (spread && s.start_from.empty())
+    stopped = gather_study_units(study.parts, study.names, ran, configs_written, study.fingerprint,
+                                 stopped, out);
+  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
+  out.write_results(output.h5(), elastic_moduli_units());
+  write_study_summary(s, out, output.summary());
+  output.finish({"table"});
+  remove_study_checkpoints(study.parts);  // everything is in results.h5 and summary.json now
 }
 
 }  // namespace granular

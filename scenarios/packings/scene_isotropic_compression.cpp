@@ -15,12 +15,11 @@
 #include "core/run/progress.hpp"
 #include "kernels/contact/contact_model.hpp"
 #include "kernels/dem/dem_system.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/packing_file.hpp"
 #include "scenarios/common/restart_file.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -105,16 +104,32 @@ struct Series {
   }
 };
 
-}  // namespace
-
-void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
-  // The start: a random gas, or a packing from a file (particles.from: LAMMPS data, an
-  // H5MD series' last frame or a state group), compressed from its own volume fraction.
-  const std::string from = scene.optional_input_path("particles.from");
-  GasSpec gas;
+// The scene's keys, read and checked. The start: a random gas, or a packing from a file
+// (particles.from: LAMMPS data, an H5MD series' last frame or a state group), compressed from
+// its own volume fraction.
+struct IsoSetup {
+  std::string from;
+  GasSpec gas;  // the gas, or the sizes, density and volume fraction of the packing read
   HostParticles start;
   PeriodicBox start_box;
-  if (from.empty()) {
+  double phi_end = 0, rate = 0, kn = 0, gn = 0;
+  long relax_steps = 0, sample_every = 0, checkpoint_every = 0;
+  // Stop as if interrupted after this many steps (0: never), leaving the checkpoint behind;
+  // used to test that --resume reproduces an uninterrupted run.
+  long stop_after = 0;
+  // ParaView time series: a frame at the first sample at or after every k steps (0: none).
+  long snapshot_every = 0;
+  bool with_contacts = false;
+  DemParams params;
+  FrictionlessLinear model() const { return {LinearNormal::uniform(kn, gn), {}, {}}; }
+  double d_mean() const { return 0.5 * (gas.diameter_min + gas.diameter_max); }
+};
+
+IsoSetup read_setup(const SceneFile& scene) {
+  IsoSetup s;
+  GasSpec& gas = s.gas;
+  s.from = scene.optional_input_path("particles.from");
+  if (s.from.empty()) {
     gas.count = scene.count("particles.count", 2, kDemBytesPerParticle);
     gas.diameter_min = scene.real("particles.diameter_min");
     gas.diameter_max = scene.real("particles.diameter_max");
@@ -123,26 +138,25 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     gas.speed = scene.real("particles.initial_speed", 0.0);
     gas.phi = scene.real("compression.phi_start");
   } else {
-    start = read_scene_packing(scene, "particles.from", from, "particles.density",
-                               scene.text("particles.from_group", "/final_state"), start_box);
-    gas.count = start.size();
-    gas.density = start.density[0];
-    for (double d : start.density)
+    s.start = read_scene_packing(scene, "particles.from", s.from, "particles.density",
+                                 scene.text("particles.from_group", "/final_state"), s.start_box);
+    gas.count = s.start.size();
+    gas.density = s.start.density[0];
+    for (double d : s.start.density)
       scene.require(d == gas.density && d > 0, "particles.from",
                     "holds particles of different or non-positive densities; this scene "
                     "keeps one density");
-    const auto [rmin, rmax] = std::minmax_element(start.radius.begin(), start.radius.end());
+    const auto [rmin, rmax] = std::minmax_element(s.start.radius.begin(), s.start.radius.end());
     gas.diameter_min = 2 * *rmin, gas.diameter_max = 2 * *rmax;
     double volume = 0;
-    for (double r : start.radius) volume += 4.0 / 3.0 * M_PI * r * r * r;
-    gas.phi = volume / start_box.volume();
+    for (double r : s.start.radius) volume += 4.0 / 3.0 * M_PI * r * r * r;
+    gas.phi = volume / s.start_box.volume();
   }
-  const double phi_end = scene.real("compression.phi_end");
-  const double rate = scene.real("compression.volumetric_strain_rate");
-  const long relax_steps = scene.integer("compression.relax_steps", 0);
-  const double kn = scene.real("contact.kn"), gn = scene.real("contact.gamma_n");
-  const FrictionlessLinear model{LinearNormal::uniform(kn, gn), {}, {}};
-  DemParams params;
+  s.phi_end = scene.real("compression.phi_end");
+  s.rate = scene.real("compression.volumetric_strain_rate");
+  s.relax_steps = scene.integer("compression.relax_steps", 0);
+  s.kn = scene.real("contact.kn"), s.gn = scene.real("contact.gamma_n");
+  DemParams& params = s.params;
   params.dt = scene.real("run.dt");
   scene.require(params.dt > 0, "run.dt", "must be positive");
   params.dt_key = "run.dt";
@@ -151,111 +165,88 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   params.damping.rotational = scene.real("damping.rotational", 0.0);
   params.rattler_threshold = scene.small_integer("run.rattler_threshold", 3);
   params.max_overlap = scene.real("run.max_overlap", 0.3);
-  const long sample_every = scene.integer("run.sample_every", 500);
-  const long checkpoint_every = scene.integer("run.checkpoint_every", 100000);
-  // Stop as if interrupted after this many steps (0: never), leaving the checkpoint behind;
-  // used to test that --resume reproduces an uninterrupted run.
-  const long stop_after = scene.integer("run.stop_after", 0);
-  // ParaView time series: a frame at the first sample at or after every k steps (0: none).
-  const long snapshot_every = scene.integer("output.snapshot_every", 0);
-  if (from.empty()) {
+  s.sample_every = scene.integer("run.sample_every", 500);
+  s.checkpoint_every = scene.integer("run.checkpoint_every", 100000);
+  s.stop_after = scene.integer("run.stop_after", 0);
+  s.snapshot_every = scene.integer("output.snapshot_every", 0);
+  if (s.from.empty()) {
     scene.require(gas.count >= 2, "particles.count", "must be at least 2");
     check_gas(scene, gas, "compression.phi_start");
   }
-  scene.require(phi_end > gas.phi && phi_end < 1.0, "compression.phi_end",
-                from.empty() ? "must lie between compression.phi_start and 1"
-                             : "must lie between the packing's volume fraction (" +
-                                   std::to_string(gas.phi) + ") and 1");
-  scene.require(rate > 0, "compression.volumetric_strain_rate", "must be positive");
+  scene.require(s.phi_end > gas.phi && s.phi_end < 1.0, "compression.phi_end",
+                s.from.empty() ? "must lie between compression.phi_start and 1"
+                               : "must lie between the packing's volume fraction (" +
+                                     std::to_string(gas.phi) + ") and 1");
+  scene.require(s.rate > 0, "compression.volumetric_strain_rate", "must be positive");
   scene.require(params.skin > 0, "run.skin", "must be positive");
-  scene.require(sample_every > 0, "run.sample_every", "must be positive");
-  scene.require(checkpoint_every > 0, "run.checkpoint_every", "must be positive");
-  scene.require(relax_steps >= 0 && relax_steps <= 100000000, "compression.relax_steps",
+  scene.require(s.sample_every > 0, "run.sample_every", "must be positive");
+  scene.require(s.checkpoint_every > 0, "run.checkpoint_every", "must be positive");
+  scene.require(s.relax_steps >= 0 && s.relax_steps <= 100000000, "compression.relax_steps",
                 "must lie in [0, 1e8]");
-  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
-  const bool with_contacts = snapshot_contacts(scene);
-  scene.require(!with_contacts || snapshot_every > 0, "output.snapshot_contacts",
+  scene.require(s.snapshot_every >= 0, "output.snapshot_every", "must not be negative");
+  s.with_contacts = snapshot_contacts(scene);
+  scene.require(!s.with_contacts || s.snapshot_every > 0, "output.snapshot_contacts",
                 "needs output.snapshot_every > 0 (the frames it adds the network to)");
   scene.reject_unknown_keys();
-  check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away
-    PeriodicBox first_box = start_box;
-    System(Particles<Exec>::from_host(from.empty() ? random_gas(gas, first_box) : start), first_box,
-           model, params);
-  });
+  return s;
+}
 
-  const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
-  require_checkpoint_to_resume(opts, checkpoint);
-  if (!begin_outputs(opts)) return;
-  const double d_mean = 0.5 * (gas.diameter_min + gas.diameter_max);
-
-  // A checkpoint holds one restart group (the system's exact state) and the series so far;
-  // the resumed run's system is made from the saved particles and then takes that state.
+// The run's system: made from the checkpoint's restart group (and its series so far) when the
+// run resumes, else from the gas or the packing read.
+System make_system(const IsoSetup& s, bool resume, const std::string& checkpoint, Series& series) {
   PeriodicBox box;
   HostParticles host;
-  Series series;
   std::optional<System::Saved> saved;
-  if (opts.resume) {
+  if (resume) {
     H5Reader in(checkpoint);
     if (!in.has("/restart"))
       throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
     try {
       saved = read_restart<System>(in, "/restart");
-      host = host_by_identity(saved->particles, gas.density);
+      host = host_by_identity(saved->particles, s.gas.density);
     } catch (const InputError& e) {
       throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
     }
     box = saved->box;
     series.read(in, "/series");
     std::cerr << "resuming from " << checkpoint << " at step " << saved->steps << "\n";
-  } else if (from.empty()) {
-    host = random_gas(gas, box);
+  } else if (s.from.empty()) {
+    host = random_gas(s.gas, box);
   } else {
-    host = start, box = start_box;
+    host = s.start, box = s.start_box;
   }
-
-  System sys(Particles<Exec>::from_host(host), box, model, params);
+  System sys(Particles<Exec>::from_host(host), box, s.model(), s.params);
   if (saved) {
     try {
       sys.restore(*saved, restart_origin("/restart"));
     } catch (const InputError& e) {
       throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
     }
-    saved.reset();
   }
+  return sys;
+}
+
+// Compresses at the volumetric rate to phi_end, then relaxes at constant volume, sampling the
+// series and checkpointing as it goes; false when it stopped at run.stop_after. A physical
+// failure leaves the last state and the frames so far, then goes on up.
+bool compress_and_relax(const IsoSetup& s, const RunOptions& opts, const std::string& checkpoint,
+                        System& sys, Series& series, SnapshotSeries& snapshots) {
   const long step0 = sys.steps();  // where this run starts: 0, or the checkpoint's step
-
   // Per-axis rate for the volumetric rate: V(t) = V0 exp(-rate t) in the limit dt -> 0.
-  const double axis_rate = -rate / 3.0;
-  const double shrink_per_step = std::pow(1.0 + axis_rate * params.dt, 3);
-  const double phi_start = gas.phi;
+  const double axis_rate = -s.rate / 3.0;
+  const double shrink_per_step = std::pow(1.0 + axis_rate * s.params.dt, 3);
   const long compress_steps =
-      static_cast<long>(std::ceil(std::log(phi_end / phi_start) / -std::log(shrink_per_step)));
-  const long total_steps = compress_steps + relax_steps;
-
+      static_cast<long>(std::ceil(std::log(s.phi_end / s.gas.phi) / -std::log(shrink_per_step)));
+  const long total_steps = compress_steps + s.relax_steps;
+  const double d_mean = s.d_mean();
   // A checkpoint stores the system's exact state and changes nothing in it, so the run does
   // not depend on checkpoint_every and a resumed run repeats the uninterrupted one bit for bit.
-  // The strain rate of the step about to be taken (compression, then relaxation).
-  auto set_phase_rate = [&]() {
-    const double r = sys.steps() < compress_steps ? axis_rate : 0.0;
-    sys.set_strain_rate(r, r, r);
-  };
   auto save_checkpoint = [&]() {
     H5Writer out(checkpoint);
     write_restart(out, "/restart", sys);
     series.write(out, "/series");
     out.commit();
   };
-  auto write_failure_snapshot = [&]() {
-    H5Writer out(opts.out_dir + "/last_state.h5");
-    write_state(out, "/state", sys.particles(), sys.box(), gas.density);
-    out.commit();
-    write_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5",
-               {state_frame("/state", sys.particles().n)}, false);
-  };
-
-  // A resumed run's series starts where it resumed; an interrupted one leaves none.
-  SnapshotSeries snapshots(opts.out_dir, "snapshots", snapshot_every);
-  snapshots.record_contacts(with_contacts);
   try {
     if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
     snapshots.sample(sys);
@@ -263,10 +254,12 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     while (sys.steps() < total_steps) {
       const bool compressing = sys.steps() < compress_steps;
       const long phase_end = compressing ? compress_steps : total_steps;
-      const long next_sample = (sys.steps() / sample_every + 1) * sample_every;
-      const long next_checkpoint = (sys.steps() / checkpoint_every + 1) * checkpoint_every;
+      const long next_sample = (sys.steps() / s.sample_every + 1) * s.sample_every;
+      const long next_checkpoint = (sys.steps() / s.checkpoint_every + 1) * s.checkpoint_every;
       const long n = std::min({phase_end, next_sample, next_checkpoint}) - sys.steps();
-      set_phase_rate();
+      // The strain rate of the steps about to be taken (compression, then relaxation).
+      const double r = compressing ? axis_rate : 0.0;
+      sys.set_strain_rate(r, r, r);
       sys.step(n);
       const Measurements m = sys.measure();
       sys.check_health(m);
@@ -274,17 +267,22 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       snapshots.sample(sys);
       char extra[96];
       std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi,
-                    m.pressure * d_mean / kn, m.z_corrected);
+                    m.pressure * d_mean / s.kn, m.z_corrected);
       progress.update(sys.steps() - step0, extra);
-      if (sys.steps() / checkpoint_every != (sys.steps() - n) / checkpoint_every) save_checkpoint();
-      if (stop_after > 0 && sys.steps() >= stop_after) {
+      if (sys.steps() / s.checkpoint_every != (sys.steps() - n) / s.checkpoint_every)
+        save_checkpoint();
+      if (s.stop_after > 0 && sys.steps() >= s.stop_after) {
         std::cerr << "stopped after step " << sys.steps()
                   << " (run.stop_after); continue with --resume\n";
-        return;
+        return false;
       }
     }
   } catch (const PhysicsError&) {
-    write_failure_snapshot();
+    H5Writer out(opts.out_dir + "/last_state.h5");
+    write_state(out, "/state", sys.particles(), sys.box(), s.gas.density);
+    out.commit();
+    write_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5",
+               {state_frame("/state", sys.particles().n)}, false);
     try {  // the frames up to the failure show how it came about
       snapshots.finish(sys);
     } catch (const std::exception& e) {
@@ -292,19 +290,13 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
     }
     throw;
   }
+  return true;
+}
 
-  const Measurements fin = sys.measure();
-  H5Writer h5(opts.out_dir + "/results.h5");
-  series.write(h5, "/series");
-  write_state(h5, "/final_state", sys.particles(), sys.box(), gas.density);
-  h5.attribute("/", "scene", std::string("isotropic_compression"));
-  h5.attribute("/", "kn", kn);
-  h5.attribute("/", "mean_diameter", d_mean);
-  h5.commit();
-  write_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5",
-             {state_frame("/final_state", sys.particles().n)}, false);
-  snapshots.finish(sys);
-
+// The end state's figures in summary.json.
+Json final_results(const IsoSetup& s, const System& sys, const Measurements& fin,
+                   const Series& series) {
+  const double d_mean = s.d_mean();
   // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.
   const auto& phi = series.col.at("phi");
   const auto& pstar = series.col.at("pressure_star");
@@ -314,19 +306,16 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
       phi_onset = phi[i];
       break;
     }
-
-  Json summary = scene_summary(scene, "isotropic_compression");
-  Json& res = summary["results"];
-  res = Json::object();
-  res["particles"] = gas.count;
+  Json res = Json::object();
+  res["particles"] = s.gas.count;
   res["steps"] = sys.steps();
   res["simulated_time"] = sys.time();
   res["phi_final"] = fin.phi;
   res["pressure_final"] = fin.pressure;
-  res["pressure_star_final"] = fin.pressure * d_mean / kn;
+  res["pressure_star_final"] = fin.pressure * d_mean / s.kn;
   res["z_final"] = fin.z;
   res["z_corrected_final"] = fin.z_corrected;
-  res["rattler_fraction_final"] = fin.rattlers / gas.count;
+  res["rattler_fraction_final"] = fin.rattlers / s.gas.count;
   res["ekin_over_epot_final"] =
       fin.epot > 0 ? Json(fin.ekin / fin.epot) : Json();  // undefined in a gas
   res["max_overlap_final"] = fin.max_overlap;
@@ -334,12 +323,46 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   res["neighbor_builds"] = sys.neighbor_list().builds();
   // Volumetric inertial number at the end of compression, I_v = rate <d> sqrt(rho / P).
   res["inertial_number_final"] =  // undefined without pressure
-      fin.pressure > 0 ? Json(rate * d_mean * std::sqrt(gas.density / fin.pressure)) : Json();
-  write_scene_summary(opts, summary);
+      fin.pressure > 0 ? Json(s.rate * d_mean * std::sqrt(s.gas.density / fin.pressure)) : Json();
+  return res;
+}
+
+}  // namespace
+
+void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
+  const IsoSetup s = read_setup(scene);
+  check_first_system(scene, opts, [&] {  // the same gas as the run's, thrown away
+    PeriodicBox first_box = s.start_box;
+    System(Particles<Exec>::from_host(s.from.empty() ? random_gas(s.gas, first_box) : s.start),
+           first_box, s.model(), s.params);
+  });
+  const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
+  require_checkpoint_to_resume(opts, checkpoint);
+  if (!begin_outputs(opts)) return;
+
+  Series series;
+  System sys = make_system(s, opts.resume, checkpoint, series);
+  // A resumed run's series starts where it resumed; an interrupted one leaves none.
+  SnapshotSeries snapshots(opts.out_dir, "snapshots", s.snapshot_every);
+  snapshots.record_contacts(s.with_contacts);
+  if (!compress_and_relax(s, opts, checkpoint, sys, series, snapshots)) return;
+
+  const Measurements fin = sys.measure();
+  SceneOutput output(scene, opts, "isotropic_compression");
+  H5Writer& h5 = output.h5();
+  series.write(h5, "/series");
+  write_state(h5, "/final_state", sys.particles(), sys.box(), s.gas.density);
+  h5.attribute("/", "scene", std::string("isotropic_compression"));
+  h5.attribute("/", "kn", s.kn);
+  h5.attribute("/", "mean_diameter", s.d_mean());
+  output.commit_results();
+  write_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5",
+             {state_frame("/final_state", sys.particles().n)}, false);
+  snapshots.finish(sys);
+  output.summary()["results"] = final_results(s, sys, fin, series);
+  output.finish();
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
-  if (opts.charts)
-    run_plot_script("isotropic_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

@@ -14,11 +14,10 @@
 #include "core/run/progress.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/materials.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/common/wall_config.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -315,8 +314,9 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
     with_material_model(c.mats, [&](const auto& m) { settling_system(m, c, pour(c)); });
   });
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "confined_compression");
+  SceneOutput output(scene, opts, "confined_compression");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json prep = Json::object();
   ConfigState state;
   const auto t0 = std::chrono::steady_clock::now();
@@ -363,16 +363,14 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "strain", c.strain);
   h5.attribute("/", "experiment_max_force", c.experiment_force);
   h5.attribute("/", "experiment_strain", c.experiment_strain);
-  h5.commit();
+  output.commit_results();
   {  // the compressed state with its six walls
     XdmfFrame scene_frame = state_frame("/snapshot", c.fill.count);
     scene_frame.name = "scene", scene_frame.nwalls = 6;
     scene_frame.wall_dataset = "/snapshot_walls/quads";
     write_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", {scene_frame}, false);
   }
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("confined_compression.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

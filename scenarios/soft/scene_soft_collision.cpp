@@ -11,9 +11,8 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "kernels/dem/dem_system.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/materials.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/soft/soft_models.hpp"
 
@@ -116,8 +115,9 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
   const std::vector<Layout> layouts = {{"three", {{1, 0, 0}, {-1, 0, 0}}},
                                        {"five", {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}}};
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "soft_collision");
+  SceneOutput output(scene, opts, "soft_collision");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   Json runs = Json::object();
   for (const Layout& layout : layouts)
     for (size_t s = 0; s < mats.materials.size(); ++s) {
@@ -134,9 +134,7 @@ void run_soft_collision(const SceneFile& scene, const RunOptions& opts) {
     }
   summary["runs"] = runs;
   h5.attribute("/", "radius", a);
-  h5.commit();
-  write_scene_summary(opts, summary);
-  if (opts.charts) run_plot_script("soft_collision.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

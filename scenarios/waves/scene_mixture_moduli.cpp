@@ -41,13 +41,12 @@
 #include "core/run/finite.hpp"
 #include "core/run/progress.hpp"
 #include "core/run/rng.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
@@ -444,78 +443,17 @@ std::string fit_unit(const std::string& column) {
                          " has no unit; add its column to fit_unit");
 }
 
-}  // namespace
-
-void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
-
-void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
-  const Setup u = read_setup(scene);
-  require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
-  check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
-    for (const Variant& v : u.variants) {
-      PeriodicBox box;
-      const HostParticles host = mixture_gas(u, v.soft_fraction, box);
-      System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
-    }
-  });
-  if (!begin_outputs(opts)) return;
-  // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
-  // when every variant is done, so an interrupted run leaves nothing that looks finished.
-  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
-  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
-  if (ensemble::root())
-    for (const char* f : {"/summary.json", "/results.h5"})
-      std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
-
-  // Over several ranks each runs its share of the mixtures and rank 0 reads every part back
-  // in mixture order; one rank runs them all, in order, as parts of a single process.
-  const bool spread = ensemble::size() > 1;
-  std::vector<std::string> names;
-  for (size_t k = 0; k < u.variants.size(); ++k)
-    names.push_back("variant_" + std::to_string(k) + "_" + u.variants[k].tag);
-  const StudyDeal deal = deal_study_units(parts, names, fingerprint, opts.resume);
-  long total = 0, done = 0;
-  for (size_t k = 0; k < u.variants.size(); ++k)
-    if (deal.done[k] || deal.mine(k)) total += static_cast<long>(u.variants[k].pressures.size());
-  Progress progress("mixtures", total, opts.progress);
-  const auto start = std::chrono::steady_clock::now();
-  ModuliOutputs out;
-  std::vector<std::string> ran;
-  bool stopped = false;
-  for (size_t k = 0; k < u.variants.size(); ++k) {
-    const Variant& v = u.variants[k];
-    const std::string& name = names[k];
-    ModuliOutputs part;
-    if (deal.done[k]) {
-      std::cerr << ensemble::prefix() << v.tag << ": taken from the checkpoint in " << parts
-                << "\n";
-      if (!spread && load_moduli_part(parts, name, fingerprint, part)) out.append(part);
-      progress.update(done += static_cast<long>(v.pressures.size()));
-      continue;
-    }
-    if (!deal.mine(k)) continue;
-    const double minutes =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
-    if (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes) {
-      std::cerr << ensemble::prefix() << "stopped before variant " << k + 1 << " of "
-                << u.variants.size() << " (--stop-after-minutes); continue with --resume\n";
-      stopped = true;
-      break;
-    }
-    run_variant(u, v, part, progress, done);
-    save_moduli_part(parts, name, fingerprint, part);
-    ran.push_back(name);
-    if (!spread) out.append(part);
-  }
-  if (spread) stopped = gather_study_units(parts, names, ran, {}, fingerprint, stopped, out);
-  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
-  progress.finish();
-
-  // Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its probed configurations.
-  const auto& T = out.table;
+// Fits of M ∝ P^n (and of K, G, M_KG) per mixture, over its probed configurations: their
+// entries of summary.json, and the columns of /fits.
+struct PowerLawFits {
+  Json json = Json::array();
+  std::map<std::string, std::vector<double>> columns;
+};
+PowerLawFits power_law_fits(const Setup& u, const std::map<std::string, std::vector<double>>& T) {
   const size_t rows = T.at("M").size();
-  Json fits = Json::array();
-  std::map<std::string, std::vector<double>> fit_cols;
+  PowerLawFits out;
+  Json& fits = out.json;
+  std::map<std::string, std::vector<double>>& fit_cols = out.columns;
   for (const Variant& v : u.variants) {
     if (v.rule != u.mats.pair_rule) continue;
     std::vector<double> P, M, K, G, MKG;
@@ -547,60 +485,54 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
     fits.push(j);
   }
 
-  // The pair-rule comparison at the check fraction and pressures.
+  return out;
+}
+
+// The pair-rule comparison at the check fraction and pressures.
+Json pair_rule_check(const Setup& u, const std::map<std::string, std::vector<double>>& T) {
+  const size_t rows = T.at("M").size();
   Json rule = Json::object();
-  if (!u.check_pressures.empty()) {
-    rule["soft_volume_fraction"] = u.check_fraction;
-    rule["rule"] = u.mats.pair_rule;
-    rule["other_rule"] = u.other_rule;
-    Json list = Json::array();
-    for (double p : u.check_pressures) {
-      double M_main = kNaN, M_same = kNaN, M_own = kNaN, P_main = kNaN, P_own = kNaN;
-      for (size_t i = 0; i < rows; ++i) {
-        if (T.at("soft_fraction")[i] != u.check_fraction || T.at("pressure_target")[i] != p)
-          continue;
-        const bool other = T.at("pair_rule_product_over_sum")[i] ==
-                           (u.other_rule == "product_over_sum" ? 1.0 : 0.0);
-        if (other) {
-          M_own = T.at("M")[i], P_own = T.at("pressure")[i];
-        } else {
-          M_main = T.at("M")[i], M_same = T.at("M_other_rule_same_packing")[i];
-          P_main = T.at("pressure")[i];
-        }
+  rule["soft_volume_fraction"] = u.check_fraction;
+  rule["rule"] = u.mats.pair_rule;
+  rule["other_rule"] = u.other_rule;
+  Json list = Json::array();
+  for (double p : u.check_pressures) {
+    double M_main = kNaN, M_same = kNaN, M_own = kNaN, P_main = kNaN, P_own = kNaN;
+    for (size_t i = 0; i < rows; ++i) {
+      if (T.at("soft_fraction")[i] != u.check_fraction || T.at("pressure_target")[i] != p) continue;
+      const bool other =
+          T.at("pair_rule_product_over_sum")[i] == (u.other_rule == "product_over_sum" ? 1.0 : 0.0);
+      if (other) {
+        M_own = T.at("M")[i], P_own = T.at("pressure")[i];
+      } else {
+        M_main = T.at("M")[i], M_same = T.at("M_other_rule_same_packing")[i];
+        P_main = T.at("pressure")[i];
       }
-      Json e = Json::object();
-      e["pressure_target"] = p;
-      // A state the check did not reach (unjammed, or no such row) has no modulus: null.
-      e["M_rule"] = Json::or_null(M_main), e["pressure_rule"] = Json::or_null(P_main);
-      e["M_other_rule_same_packing"] = Json::or_null(M_same);
-      e["ratio_same_packing"] = Json::or_null(M_same / M_main);
-      e["M_other_rule_own_packing"] = Json::or_null(M_own);
-      e["pressure_other_rule"] = Json::or_null(P_own);
-      e["ratio_own_packing"] = Json::or_null(M_own / M_main);
-      list.push(e);
     }
-    rule["by_pressure"] = list;
-    rule["what_changes"] =
-        "the rule sets k_t, gamma_n, gamma_t and mu of unlike (stiff-soft) contacts; E* mixes "
-        "as 1/E* = sum (1 - nu^2)/E under both; like pairs keep their own values. "
-        "'same_packing' re-probes the packing prepared with the default rule (probing sees k_t "
-        "only, sliding being off); 'own_packing' prepares and probes with the other rule (its "
-        "smaller unlike friction also changes the packing)";
+    Json e = Json::object();
+    e["pressure_target"] = p;
+    // A state the check did not reach (unjammed, or no such row) has no modulus: null.
+    e["M_rule"] = Json::or_null(M_main), e["pressure_rule"] = Json::or_null(P_main);
+    e["M_other_rule_same_packing"] = Json::or_null(M_same);
+    e["ratio_same_packing"] = Json::or_null(M_same / M_main);
+    e["M_other_rule_own_packing"] = Json::or_null(M_own);
+    e["pressure_other_rule"] = Json::or_null(P_own);
+    e["ratio_own_packing"] = Json::or_null(M_own / M_main);
+    list.push(e);
   }
+  rule["by_pressure"] = list;
+  rule["what_changes"] =
+      "the rule sets k_t, gamma_n, gamma_t and mu of unlike (stiff-soft) contacts; E* mixes "
+      "as 1/E* = sum (1 - nu^2)/E under both; like pairs keep their own values. "
+      "'same_packing' re-probes the packing prepared with the default rule (probing sees k_t "
+      "only, sliding being off); 'own_packing' prepares and probes with the other rule (its "
+      "smaller unlike friction also changes the packing)";
+  return rule;
+}
 
-  std::vector<std::string> table_units, fit_units;  // all of them before anything is written
-  for (const auto& [k, v] : T) table_units.push_back(table_unit(k));
-  for (const auto& [k, v] : fit_cols) fit_units.push_back(fit_unit(k));
-  H5Writer h5(opts.out_dir + "/results.h5");
-  size_t col = 0;
-  for (const auto& [k, v] : T) write_quantity(h5, "/table/" + k, v, table_units[col++]);
-  col = 0;
-  for (const auto& [k, v] : fit_cols) write_quantity(h5, "/fits/" + k, v, fit_units[col++]);
-  h5.commit();
-
-  Json summary = scene_summary(scene, "mixture_moduli");
-  Json& ch = summary["choices"];
-  ch = Json::object();
+// The choices the run made where the source leaves them open (summary.json).
+Json choices_json(const Setup& u) {
+  Json ch = Json::object();
   Json mats = Json::object();
   for (const MixtureMaterial& m : u.mats.materials) {
     Json j = Json::object();
@@ -645,10 +577,12 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   ch["fit"] =
       "least squares of log M against log P over the probed configurations of each mixture "
       "(default pair rule); stderr = s / sqrt(sum (log P - mean)^2)";
-  summary["table"] = out.rows;
-  summary["fits"] = fits;
-  if (!u.check_pressures.empty()) summary["pair_rule_check"] = rule;
-  // The states the servo did not converge to, each with whether it was probed anyway.
+  return ch;
+}
+
+// The states the servo did not converge to, each with whether it was probed anyway.
+Json unconverged_states(const std::map<std::string, std::vector<double>>& T) {
+  const size_t rows = T.at("M").size();
   Json unconverged = Json::array();
   for (size_t i = 0; i < rows; ++i)
     if (T.at("servo_converged")[i] == 0) {
@@ -660,17 +594,118 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
       e["probed"] = T.at("probed")[i] > 0;
       unconverged.push(e);
     }
-  summary["unconverged_states"] = unconverged;
+  return unconverged;
+}
+
+// The range of M / (K + 4G/3) over the probed configurations; null when none jammed.
+Json m_ratio_range(const std::map<std::string, std::vector<double>>& T) {
+  const size_t rows = T.at("M").size();
   double lo = INFINITY, hi = -INFINITY;
   for (size_t i = 0; i < rows; ++i)
     if (T.at("probed")[i] > 0)
       lo = -max_keep_nan(-lo, -T.at("M_over_M_KG")[i]),
       hi = max_keep_nan(hi, T.at("M_over_M_KG")[i]);
-  summary["M_over_K_plus_4G_3_range"] =  // null when no configuration jammed
-      lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
-  write_scene_summary(opts, summary, {"table"});
+  return lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
+}
+
+// Runs this rank's mixtures, each saved as a checkpoint part; those a resumed run finds done
+// are taken from their parts. False when the run stopped before its end
+// (--stop-after-minutes): the checkpoints are its output so far.
+bool run_mixtures(const Setup& u, const RunOptions& opts, const std::string& parts,
+                  const std::string& fingerprint, const std::vector<std::string>& names,
+                  ModuliOutputs& out, std::vector<std::string>& ran) {
+  const bool spread = ensemble::size() > 1;
+  const StudyDeal deal = deal_study_units(parts, names, fingerprint, opts.resume);
+  long total = 0, done = 0;
+  for (size_t k = 0; k < u.variants.size(); ++k)
+    if (deal.done[k] || deal.mine(k)) total += static_cast<long>(u.variants[k].pressures.size());
+  Progress progress("mixtures", total, opts.progress);
+  const auto start = std::chrono::steady_clock::now();
+  for (size_t k = 0; k < u.variants.size(); ++k) {
+    const Variant& v = u.variants[k];
+    const std::string& name = names[k];
+    ModuliOutputs part;
+    if (deal.done[k]) {
+      std::cerr << ensemble::prefix() << v.tag << ": taken from the checkpoint in " << parts
+                << "\n";
+      if (!spread && load_moduli_part(parts, name, fingerprint, part)) out.append(part);
+      progress.update(done += static_cast<long>(v.pressures.size()));
+      continue;
+    }
+    if (!deal.mine(k)) continue;
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
+    if (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes) {
+      std::cerr << ensemble::prefix() << "stopped before variant " << k + 1 << " of "
+                << u.variants.size() << " (--stop-after-minutes); continue with --resume\n";
+      return false;
+    }
+    run_variant(u, v, part, progress, done);
+    save_moduli_part(parts, name, fingerprint, part);
+    ran.push_back(name);
+    if (!spread) out.append(part);
+  }
+  if (ensemble::root()) progress.finish();  // the other ranks wrote their parts
+  return true;
+}
+
+}  // namespace
+
+void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
+
+void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup u = read_setup(scene);
+  require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
+  check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
+    for (const Variant& v : u.variants) {
+      PeriodicBox box;
+      const HostParticles host = mixture_gas(u, v.soft_fraction, box);
+      System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
+    }
+  });
+  if (!begin_outputs(opts)) return;
+  // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
+  // when every variant is done, so an interrupted run leaves nothing that looks finished.
+  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
+  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
+  if (ensemble::root())
+    for (const char* f : {"/summary.json", "/results.h5"})
+      std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
+
+  // Over several ranks each runs its share of the mixtures and rank 0 reads every part back
+  // in mixture order; one rank runs them all, in order, as parts of a single process.
+  std::vector<std::string> names;
+  for (size_t k = 0; k < u.variants.size(); ++k)
+    names.push_back("variant_" + std::to_string(k) + "_" + u.variants[k].tag);
+  ModuliOutputs out;
+  std::vector<std::string> ran;
+  bool stopped = !run_mixtures(u, opts, parts, fingerprint, names, out, ran);
+  if (ensemble::size() > 1)
+    stopped = gather_study_units(parts, names, ran, {}, fingerprint, stopped, out);
+  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
+
+  const auto& T = out.table;
+  const PowerLawFits fits = power_law_fits(u, T);
+  const Json rule = u.check_pressures.empty() ? Json::object() : pair_rule_check(u, T);
+  std::vector<std::string> table_units, fit_units;  // all of them before anything is written
+  for (const auto& [k, v] : T) table_units.push_back(table_unit(k));
+  for (const auto& [k, v] : fits.columns) fit_units.push_back(fit_unit(k));
+  SceneOutput output(scene, opts, "mixture_moduli");
+  H5Writer& h5 = output.h5();
+  size_t col = 0;
+  for (const auto& [k, v] : T) write_quantity(h5, "/table/" + k, v, table_units[col++]);
+  col = 0;
+  for (const auto& [k, v] : fits.columns) write_quantity(h5, "/fits/" + k, v, fit_units[col++]);
+
+  Json& summary = output.summary();
+  summary["choices"] = choices_json(u);
+  summary["table"] = out.rows;
+  summary["fits"] = fits.json;
+  if (!u.check_pressures.empty()) summary["pair_rule_check"] = rule;
+  summary["unconverged_states"] = unconverged_states(T);
+  summary["M_over_K_plus_4G_3_range"] = m_ratio_range(T);
+  output.finish({"table"});
   remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
-  if (opts.charts) run_plot_script("mixture_moduli.py", opts.out_dir + "/results.h5", opts.out_dir);
 }
 
 }  // namespace granular

@@ -11,8 +11,7 @@
 #include "core/io/output.hpp"
 #include "core/signal/synthetic_signals.hpp"
 #include "core/signal/trace_io.hpp"
-#include "scenarios/common/charts.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/signal_report.hpp"
 
@@ -197,8 +196,9 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
   scene.reject_unknown_keys();
 
   if (!begin_outputs(opts)) return;
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "signal_analysis");
+  SceneOutput output(scene, opts, "signal_analysis");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   if (synthetic) {
     Json out = Json::object();
     run_synthetic(syn, settings, h5, out, opts.out_dir);
@@ -257,10 +257,7 @@ void run_signal_analysis(const SceneFile& scene, const RunOptions& opts) {
     }
   }
   h5.attribute("/", "synthetic", synthetic ? 1.0 : 0.0);
-  h5.commit();
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("signal_analysis.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

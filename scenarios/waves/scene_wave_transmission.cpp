@@ -22,9 +22,8 @@
 #include "core/run/rng.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
-#include "scenarios/common/charts.hpp"
 #include "scenarios/common/config_state.hpp"
-#include "scenarios/common/run_report.hpp"
+#include "scenarios/common/scene_output.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/skeleton.hpp"
@@ -775,8 +774,9 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   with_material_model(prep_mats,
                       [&](const auto& m) { states = prepare(m, w, density, h, box, opts); });
 
-  H5Writer h5(opts.out_dir + "/results.h5");
-  Json summary = scene_summary(scene, "wave_transmission");
+  SceneOutput output(scene, opts, "wave_transmission");
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
   summary["particles"] = h.size();
   summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
   summary["pair_rule"] = w.mats.pair_rule;
@@ -842,10 +842,7 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "states", static_cast<double>(states.size()));
   summary["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  h5.commit();
-  write_scene_summary(opts, summary);
-  if (opts.charts)
-    run_plot_script("wave_transmission.py", opts.out_dir + "/results.h5", opts.out_dir);
+  output.finish();
 }
 
 }  // namespace granular

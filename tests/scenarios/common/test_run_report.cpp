@@ -51,6 +51,18 @@ const SceneEntry& entry_named(const std::string& name) {
   throw std::runtime_error("no scene " + name);
 }
 
+// The shipped isotropic compression with a time step its guard refuses once the run has begun
+// its outputs (the system is built after begin_outputs).
+SceneFile too_fast_compression(const std::string& dir) {
+  std::string text = granular::testing::shipped_scene("isotropic_compression.toml");
+  granular::testing::replace_once(text, "dt = 0.004", "dt = 0.4");
+  const std::string path = dir + "/too_fast.toml";
+  std::ofstream(path) << text;
+  SceneFile scene = SceneFile::load(path);
+  scene.text("scene");
+  return scene;
+}
+
 // One small two-particle run through the CLI's path (driver, run record, report), shared by
 // the tests of this file.
 class RunReport : public ::testing::Test {
@@ -164,6 +176,23 @@ TEST_F(RunReport, RefusedRunLeavesTheEarlierReportAlone) {
   EXPECT_EQ(fs::last_write_time(out() + "/report.html"), before);
 }
 
+// The report follows the driver's begin_outputs, not the folder's file times: a run that fails
+// after it began its outputs, before it wrote any file into an empty folder it did not have to
+// create, still gets a report saying it failed (the folder's time did not change, and an
+// earlier version wrote no report then).
+TEST_F(RunReport, RunThatFailsBeforeWritingAnyFileGetsAFailedReport) {
+  const std::string folder = dir_ + "/out_failed_empty";
+  fs::create_directories(folder);
+  SceneFile scene = too_fast_compression(dir_);
+  RunOptions opts;
+  opts.out_dir = folder;
+  opts.progress = false, opts.charts = false;
+  EXPECT_THROW(run_scene(entry_named("isotropic_compression"), scene, opts), PhysicsError);
+  ASSERT_TRUE(fs::exists(folder + "/report.html"));
+  EXPECT_NE(read_text(folder + "/report.html").find("failed"), std::string::npos);
+  EXPECT_FALSE(fs::exists(folder + "/summary.json"));
+}
+
 // Opens a copy of the report in headless Chromium with a probe that writes, once the page
 // has loaded, how many images decoded (naturalWidth > 0) and how many errors were raised
 // (script errors, failed loads, console.error) into the DOM that --dump-dom prints.
@@ -214,12 +243,7 @@ TEST_F(RunReport, FailedRunLeavesNoEarlierRunsSummaryOrReport) {
   fs::create_directories(folder);
   for (const char* name : {"summary.json", "report.html", "results.h5"})
     std::ofstream(folder + "/" + name) << "earlier run\n";
-  std::string text = granular::testing::shipped_scene("isotropic_compression.toml");
-  granular::testing::replace_once(text, "dt = 0.004", "dt = 0.4");  // refused by the guard
-  const std::string path = dir_ + "/too_fast.toml";
-  std::ofstream(path) << text;
-  SceneFile scene = SceneFile::load(path);
-  scene.text("scene");
+  SceneFile scene = too_fast_compression(dir_);
   RunOptions opts;
   opts.out_dir = folder;
   opts.progress = false, opts.charts = false;
