@@ -33,17 +33,20 @@ REFERENCE = ROOT / "scenarios" / "reference"
 # Scenes of a few seconds each: the default test suite verifies them.
 FAST = ["two_particle_linear", "hysteretic_collision", "impact_glass_wall", "impact_benchmarks",
         "soft_collision", "lammps_forces", "signal_analysis_traces",
-        "signal_analysis_synthetic", "chain_tones_quick"]
+        "signal_analysis_synthetic", "chain_tones_quick", "chain_impulse_quick",
+        "chain_master_equation_quick", "continuum_fit_quick"]
 # Quick variants of a minute or more: the `verify` label (ctest -L verify).
 SLOW = ["confined_compression_quick", "wave_transmission_quick",
         "wave_transmission_mixture_quick", "mixture_moduli_quick", "moduli_linear_quick",
         "moduli_tangential_stiffness_quick", "cohesion_list_quick", "reversibility_quick",
         "keep_friction_probes_quick", "jamming_friction_quick",
-        "amplitude_sweep_friction_quick"]
+        "amplitude_sweep_friction_quick", "moduli_hertz_quick", "cohesive_sweep_quick",
+        "system_size_quick"]
 # Full scenes whose reference the current code reproduces, of minutes each: the
 # `long` label (ctest -L long). A full scene joins this list once its reference is
 # regenerated and verified.
-FULL = ["wave_transmission", "confined_compression_hydrogel", "confined_compression_rubber"]
+FULL = ["wave_transmission", "confined_compression_hydrogel", "confined_compression_rubber",
+        "isotropic_compression"]
 
 SKIPPED_KEYS = ("seconds", "per_second", "started_utc", "finished_utc")
 
