@@ -23,7 +23,7 @@ struct LinearNormal {
 
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
     const Params& q = table(s.si, s.sj);
-    return q.kn * s.delta + q.gn * s.delta_dot;
+    return linear_normal_force(q.kn, q.gn, s.delta, s.delta_dot);
   }
   KOKKOS_INLINE_FUNCTION double elastic_force(const PairState& s, const double*) const {
     return table(s.si, s.sj).kn * s.delta;

@@ -61,10 +61,8 @@ struct ContactModel {
       for (int d = 0; d < 3; ++d) out.f[d] += out.ft[d];
       // The contact point sits mid-overlap: lever arm -(a_i - delta/2) n from i (force ft)
       // and +(a_j - delta/2) n from j (force -ft); the torques then balance exactly.
-      double nxf[3];
-      cross3(s.n, out.ft, nxf);
       const double li = s.ai - 0.5 * s.delta, lj = s.aj - 0.5 * s.delta;
-      for (int d = 0; d < 3; ++d) out.q[d] = -li * nxf[d], out.qj[d] = -lj * nxf[d];
+      contact_torques(s.n, out.ft, li, lj, out.q, out.qj);
     }
     if constexpr (Rolling::active) {
       double qr[3] = {0, 0, 0};

@@ -6,6 +6,8 @@
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 
+#include "kernels/contact/lane_math.hpp"
+
 namespace granular {
 
 constexpr int kMaxSpecies = 4;
@@ -103,18 +105,19 @@ KOKKOS_INLINE_FUNCTION double norm3(const double a[3]) {
 // round-off), and restoring its length would divide by sqrt(1 - x) ~ 0, or take the root of
 // a negative number where |n| > 1 makes x > 1. Such a spring is released (set to zero).
 constexpr double kSpringAlongNormal = 1e-6;
+
+// The law parts shared with the host's four-lane paths (kernels/contact/lane_law.inc), for
+// double.
+#define LANE_T double
+#define LANE_M bool
+#define LANE_FN KOKKOS_FORCEINLINE_FUNCTION
+#include "kernels/contact/lane_law.inc"
+#undef LANE_T
+#undef LANE_M
+#undef LANE_FN
+
 KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
-  const double len_sq = dot3(s, s);
-  if (len_sq == 0.0) return;
-  const double sn = dot3(s, n);
-  const double x = sn * sn / len_sq;
-  if (!(x < 1.0 - kSpringAlongNormal)) {  // also catches x = NaN from an inf spring
-    for (int d = 0; d < 3; ++d) s[d] = 0.0;
-    return;
-  }
-  const double scale = x < 1e-4 ? 1.0 + x * (0.5 + x * (0.375 + x * 0.3125))
-                                : 1.0 / Kokkos::Experimental::sqrt(1.0 - x);
-  for (int d = 0; d < 3; ++d) s[d] = (s[d] - sn * n[d]) * scale;
+  rotate_into_plane_lanes(s, n, true);
 }
 
 // Spring-dashpot with a Coulomb limit, shared by sliding, rolling and torsion:
@@ -136,22 +139,7 @@ KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
 KOKKOS_INLINE_FUNCTION bool coulomb_spring(double s[3], const double v[3], double k, double g,
                                            double mu_s, double mu_d, double fn, double f[3],
                                            bool keep_dashpot = true) {
-  for (int d = 0; d < 3; ++d) f[d] = -k * s[d] - g * v[d];
-  const double f_sq = dot3(f, f);
-  const double afn = fn < 0.0 ? -fn : fn;
-  const double limit = mu_s * afn;
-  // No square root while sticking. Written as !(f_sq > ...) so that mu_s = infinity sticks
-  // also at f_n = 0, where the limit inf * 0 is NaN (it used to slide there, with a NaN force).
-  if (!(f_sq > limit * limit)) return false;
-  const double fmag = Kokkos::Experimental::sqrt(f_sq);
-  const double slide = mu_d * afn;
-  const double scale = fmag > 0.0 ? slide / fmag : 0.0;
-  const double gs = keep_dashpot ? g : 0.0;
-  for (int d = 0; d < 3; ++d) {
-    f[d] *= scale;
-    s[d] = k > 0.0 ? -(f[d] + gs * v[d]) / k : 0.0;
-  }
-  return true;
+  return coulomb_spring_lanes(s, v, k, g, mu_s, mu_d, fn, f, keep_dashpot, true);
 }
 
 }  // namespace granular

@@ -7,8 +7,9 @@
 // batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
 // registers (GCC vector extensions in a function compiled for AVX; the rest of the build
 // stays portable, and the batch is used only where the processor reports AVX at run time),
-// and the forces are then scattered row by row in list order. Every lane performs exactly
-// the scalar law's operations in the scalar order (no contraction into FMA, branches
+// and the forces are then scattered row by row in list order. The law's parts are the scalar
+// law's own, written once over the number type (kernels/contact/lane_law.inc): every lane
+// performs the scalar operations in the scalar order (no contraction into FMA, branches
 // replaced by selecting between both outcomes, a rare branch skipped only where no lane of a
 // vector takes it), and the sums keep the scalar kernel's order, so the trajectories are
 // bitwise those of the scalar path, on any processor (tests/kernels/cpu/test_contact_batch.cpp).
@@ -79,6 +80,15 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
 
 #if GRANULAR_CONTACT_BATCH
 
+// The law parts of kernels/contact/lane_law.inc, for four AVX lanes.
+#define LANE_T simd4::V
+#define LANE_M simd4::M
+#define LANE_FN GRANULAR_AVX_INLINE
+#include "kernels/contact/lane_law.inc"
+#undef LANE_T
+#undef LANE_M
+#undef LANE_FN
+
 // One batch of touching contacts, structure of arrays. Rows (the owner particle i and the
 // end of its contacts in the batch) are never split between batches.
 struct ContactBatch {
@@ -113,13 +123,9 @@ struct ContactBatch {
   GRANULAR_AVX_INLINE static V load(const double* a) { return simd4::load(a); }
   GRANULAR_AVX_INLINE static void store(double* a, V v) { simd4::store(a, v); }
   GRANULAR_AVX_INLINE static V splat(double x) { return simd4::splat(x); }
-  GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return m ? a : b; }
-  // Whether any / every lane of a comparison holds. The square roots and divisions of the
-  // rare branches (a spring far out of the tangent plane, a sliding contact) are the slowest
-  // instructions of a lane: a vector none of whose lanes takes the branch skips them.
-  GRANULAR_AVX_INLINE static int lanes(M m) { return __builtin_ia32_movmskpd256((V)m); }
-  GRANULAR_AVX_INLINE static bool any(M m) { return lanes(m) != 0; }
-  GRANULAR_AVX_INLINE static bool all(M m) { return lanes(m) == 0xf; }
+  GRANULAR_AVX_INLINE static V sel(M m, V a, V b) { return lane_select(m, a, b); }
+  // The lanes of a comparison that hold, as bits.
+  GRANULAR_AVX_INLINE static int lanes(M m) { return lane_bits(m); }
   // A pair parameter of four lanes: broadcast (uniform) or loaded from the slots at a.
   template <bool Uniform>
   GRANULAR_AVX_INLINE static V par(const double* a, double u) {
@@ -128,8 +134,6 @@ struct ContactBatch {
     else
       return load(a);
   }
-  // The correctly rounded square root of each lane, as the scalar law takes it.
-  GRANULAR_AVX_INLINE static V vsqrt(V x) { return __builtin_ia32_sqrtpd256(x); }
 
   // Every pair takes (pn, pt) from now on: no per-contact parameters are stored.
   void set_uniform(const LinearNormal::Params& pn, const CoulombTangential::Params& pt) {
@@ -224,75 +228,33 @@ struct ContactBatch {
     }
   }
 
-  // The law on one vector of contacts (also the near stream's, kernels/cpu/near_stream.hpp). The
-  // rare branches are taken only where a lane in `active` needs them: the other lanes (apart
-  // pairs of the stream) are not used, and must not send a vector down a branch.
+  // The law on one vector of contacts (also the near stream's, kernels/cpu/near_stream.hpp):
+  // the parts of kernels/contact/lane_law.inc, composed as ContactModel::evaluate composes them
+  // for one contact (pair_geometry, LinearNormal::force, CoulombTangential::force with the
+  // constant spring, the torques). The rare branches are taken only where a lane in `active`
+  // needs them: the other lanes (apart pairs of the stream) are not used, and must not send a
+  // vector down a branch.
   GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt,
                                       M active = M{-1, -1, -1, -1}) {
-    const V one = splat(1.0), zero = splat(0.0), half = splat(0.5);
-    const V X = l.X, Y = l.Y, Z = l.Z;
-    const V r = vsqrt(X * X + Y * Y + Z * Z);  // as touching() forms |r|^2
-    const V inv = one / r;
-    const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
-    const V a_i = l.ai, a_j = l.aj;
-    const V delta = a_i + a_j - r;
-    const V d0 = l.d0, d1 = l.d1, d2 = l.d2;
-    const V vn = d0 * n0 + d1 * n1 + d2 * n2;
-    const V fn = p.kn * delta + p.gn * -vn;
-    V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
-    const V li = a_i - half * delta, lj = a_j - half * delta;
-    const V aw0 = li * l.wi0 + lj * l.wj0;
-    const V aw1 = li * l.wi1 + lj * l.wj1;
-    const V aw2 = li * l.wi2 + lj * l.wj2;
-    const V c0 = aw1 * n2 - aw2 * n1, c1 = aw2 * n0 - aw0 * n2, c2 = aw0 * n1 - aw1 * n0;
-    const V vt0 = d0 - vn * n0 - c0, vt1 = d1 - vn * n1 - c1, vt2 = d2 - vn * n2 - c2;
-    // rotate_into_plane: an empty spring stays as it is, one along the normal is released.
-    V s0 = l.s0, s1 = l.s1, s2 = l.s2;
-    const V len_sq = s0 * s0 + s1 * s1 + s2 * s2;
-    const M empty = len_sq == zero;
-    const V sn = s0 * n0 + s1 * n1 + s2 * n2;
-    const V x = sn * sn / sel(empty, one, len_sq);
-    const V taylor = one + x * (half + x * (splat(0.375) + x * splat(0.3125)));
-    const M small = x < splat(1e-4);
-    V scale = taylor;
-    M released = small & ~small;  // none
-    if (!all(small | ~active)) {
-      const M in_plane = x < splat(1.0 - kSpringAlongNormal);  // false for NaN too
-      const M root = in_plane & ~small;
-      scale = sel(root, one / vsqrt(sel(root, one - x, one)), taylor);
-      released = ~(in_plane | empty);
-    }
-    s0 = sel(empty, s0, (s0 - sn * n0) * scale);
-    s1 = sel(empty, s1, (s1 - sn * n1) * scale);
-    s2 = sel(empty, s2, (s2 - sn * n2) * scale);
-    s0 = sel(released, zero, s0), s1 = sel(released, zero, s1), s2 = sel(released, zero, s2);
-    s0 += vt0 * vdt, s1 += vt1 * vdt, s2 += vt2 * vdt;
-    // coulomb_spring with k = kt, g = gt.
-    const V k = p.kt, g = p.gt, nk = -k;
-    V t0 = nk * s0 - g * vt0, t1 = nk * s1 - g * vt1, t2 = nk * s2 - g * vt2;
-    const V f_sq = t0 * t0 + t1 * t1 + t2 * t2;
-    const V afn = sel(fn < zero, -fn, fn);
-    const V limit = p.mus * afn;
-    const M slides = f_sq > limit * limit;
-    if (any(slides & active)) {
-      const V fmag = vsqrt(f_sq);
-      const V slide = p.mud * afn;
-      const V shrink = sel(fmag > zero, slide / sel(fmag > zero, fmag, one), zero);
-      const V u0 = t0 * shrink, u1 = t1 * shrink, u2 = t2 * shrink;
-      const M stiff = k > zero;
-      const V kk = sel(stiff, k, one);
-      s0 = sel(slides, sel(stiff, -(u0 + g * vt0) / kk, zero), s0);
-      s1 = sel(slides, sel(stiff, -(u1 + g * vt1) / kk, zero), s1);
-      s2 = sel(slides, sel(stiff, -(u2 + g * vt2) / kk, zero), s2);
-      t0 = sel(slides, u0, t0), t1 = sel(slides, u1, t1), t2 = sel(slides, u2, t2);
-    }
-    l.s0 = s0, l.s1 = s1, l.s2 = s2;
-    l.F0 = F0 + t0, l.F1 = F1 + t1, l.F2 = F2 + t2;
-    // Torques: lever arms a - delta/2, -l (n x ft) on i and on j.
-    const V x0 = n1 * t2 - n2 * t1, x1 = n2 * t0 - n0 * t2, x2 = n0 * t1 - n1 * t0;
-    const V mli = -li, mlj = -lj;
-    l.q0 = mli * x0, l.q1 = mli * x1, l.q2 = mli * x2;
-    l.p0 = mlj * x0, l.p1 = mlj * x1, l.p2 = mlj * x2;
+    const V r[3] = {l.X, l.Y, l.Z};
+    const V dv[3] = {l.d0, l.d1, l.d2};
+    V n[3], delta, vn;
+    contact_frame(r, l.X * l.X + l.Y * l.Y + l.Z * l.Z, l.ai, l.aj, dv, n, delta, vn);
+    const V fn = linear_normal_force(p.kn, p.gn, delta, -vn);
+    const V wi[3] = {l.wi0, l.wi1, l.wi2}, wj[3] = {l.wj0, l.wj1, l.wj2};
+    V li, lj, vt[3];
+    contact_slip(dv, n, vn, delta, l.ai, l.aj, wi, wj, li, lj, vt);
+    V s[3] = {l.s0, l.s1, l.s2};
+    rotate_into_plane_lanes(s, n, active);
+    for (int d = 0; d < 3; ++d) s[d] += vt[d] * vdt;
+    V t[3];
+    coulomb_spring_lanes(s, vt, p.kt, p.gt, p.mus, p.mud, fn, t, true, active);
+    l.s0 = s[0], l.s1 = s[1], l.s2 = s[2];
+    l.F0 = fn * n[0] + t[0], l.F1 = fn * n[1] + t[1], l.F2 = fn * n[2] + t[2];
+    V q[3], qj[3];
+    contact_torques(n, t, li, lj, q, qj);
+    l.q0 = q[0], l.q1 = q[1], l.q2 = q[2];
+    l.p0 = qj[0], l.p1 = qj[1], l.p2 = qj[2];
   }
 };
 

@@ -377,11 +377,12 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
   if (cur >= 0) add3(f + 3L * cur, fxy, fz), add3(q + 3L * cur, qxy, qz);
 }
 
-// The same for the frictionless linear law (pn for every pair): pair_geometry's and
-// LinearNormal's operations in the lanes (r, n, delta, the approach speed, fn = kn delta +
-// gn delta_dot, f = fn n), each touching lane's force added to its owner's sum and taken
-// from its partner's, in stream order: the forces of the rows (one_pass_row), bitwise. No
-// spring, no torque; a row without near entries adds its +0 to the force only, as there.
+// The same for the frictionless linear law (pn for every pair): contact_frame and
+// linear_normal_force of kernels/contact/lane_law.inc in the lanes (r, n, delta, the approach
+// speed, fn = kn delta + gn delta_dot, f = fn n), each touching lane's force added to its owner's
+// sum and taken from its partner's, in stream order: the forces of the rows (one_pass_row),
+// bitwise. No spring, no torque; a row without near entries adds its +0 to the force only, as
+// there.
 GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, const PeriodicBox& b,
                                                   const LinearNormal::Params& pn, const int* si,
                                                   const int* sj, int e0, int e1, const int* empty,
@@ -398,7 +399,7 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
   const double* const rad = &hv.radius(0);
   const LaneBox lb = lane_box(b);
   const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
-  const V kn = CB::splat(pn.kn), gn = CB::splat(pn.gn), one = CB::splat(1.0);
+  const V kn = CB::splat(pn.kn), gn = CB::splat(pn.gn);
   int cur = -1;
   __m128d fxy = _mm_setzero_pd();
   double fz = 0.0;
@@ -419,14 +420,12 @@ GRANULAR_AVX2 inline void near_stream_slab_normal(const HostParticleViews& hv, c
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
       load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
-      const V r = CB::vsqrt(r2);
-      const V inv = one / r;
-      const V n0 = X * inv, n1 = Y * inv, n2 = Z * inv;
-      const V delta = ai + aj - r;
-      const V d0 = vi0 - vj0 + r30 * X, d1 = vi1 - vj1 + r31 * Y, d2 = vi2 - vj2 + r32 * Z;
-      const V vn = d0 * n0 + d1 * n1 + d2 * n2;
-      const V fn = kn * delta + gn * -vn;
-      const V F0 = fn * n0, F1 = fn * n1, F2 = fn * n2;
+      const V r[3] = {X, Y, Z};
+      const V dv[3] = {vi0 - vj0 + r30 * X, vi1 - vj1 + r31 * Y, vi2 - vj2 + r32 * Z};
+      V n[3], delta, vn;
+      contact_frame(r, r2, ai, aj, dv, n, delta, vn);
+      const V fn = linear_normal_force(kn, gn, delta, -vn);
+      const V F0 = fn * n[0], F1 = fn * n[1], F2 = fn * n[2];
       CB::store(xy, (V)_mm256_unpacklo_pd((__m256d)F0, (__m256d)F1));
       CB::store(xy + CB::kW, (V)_mm256_unpackhi_pd((__m256d)F0, (__m256d)F1));
       CB::store(z4, F2);

@@ -64,30 +64,22 @@ KOKKOS_FORCEINLINE_FUNCTION void pair_geometry(const Body& bi, const Body& bj, d
                                                double rz, double r2, const double rate[3],
                                                bool rotations, PairState& s) {
   s.ai = bi.a, s.aj = bj.a;
-  const double r = Kokkos::Experimental::sqrt(r2);
-  const double inv = 1.0 / r;
-  s.n[0] = rx * inv, s.n[1] = ry * inv, s.n[2] = rz * inv;
-  s.delta = s.ai + s.aj - r;
+  const double r[3] = {rx, ry, rz};
+  const double dv[3] = {bi.v[0] - bj.v[0] + rate[0] * rx, bi.v[1] - bj.v[1] + rate[1] * ry,
+                        bi.v[2] - bj.v[2] + rate[2] * rz};
+  double vn;
+  contact_frame(r, r2, s.ai, s.aj, dv, s.n, s.delta, vn);
   s.si = bi.s, s.sj = bj.s;
   s.mstar = bi.m * bj.m / (bi.m + bj.m);
   s.wall = false;
-  const double dv[3] = {bi.v[0] - bj.v[0] + rate[0] * rx, bi.v[1] - bj.v[1] + rate[1] * ry,
-                        bi.v[2] - bj.v[2] + rate[2] * rz};
-  const double vn = dot3(dv, s.n);
   s.delta_dot = -vn;
   if (rotations) {
     // Contact point in the middle of the overlap, at lever arms a - delta/2 from both
     // centres: then the torques of a tangential force balance exactly and angular
     // momentum is conserved. Contact-point velocity v_i - l_i w_i x n minus v_j + l_j w_j x n.
-    const double li = s.ai - 0.5 * s.delta, lj = s.aj - 0.5 * s.delta;
-    const double aw[3] = {li * bi.w[0] + lj * bj.w[0], li * bi.w[1] + lj * bj.w[1],
-                          li * bi.w[2] + lj * bj.w[2]};
-    double c[3];
-    cross3(aw, s.n, c);
-    for (int d = 0; d < 3; ++d) {
-      s.vt[d] = dv[d] - vn * s.n[d] - c[d];
-      s.wrel[d] = bi.w[d] - bj.w[d];
-    }
+    double li, lj;
+    contact_slip(dv, s.n, vn, s.delta, s.ai, s.aj, bi.w, bj.w, li, lj, s.vt);
+    for (int d = 0; d < 3; ++d) s.wrel[d] = bi.w[d] - bj.w[d];
   } else {
     for (int d = 0; d < 3; ++d) s.vt[d] = dv[d] - vn * s.n[d], s.wrel[d] = 0.0;
   }
