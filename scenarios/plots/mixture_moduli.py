@@ -80,6 +80,48 @@ axes[1].set_xlabel("P (MPa)")
 axes[1].set_ylabel("M / (K + 4G/3)")
 save(fig, outdir, "M_vs_K_plus_4G_3.png")
 
+# The load-bearing skeleton ([analysis] skeleton = true): the pressure carried by each contact
+# type, contacts per particle by type, and the stiff network's largest cluster (filled: it wraps
+# around the box along all three axes), against the rubber fraction, per target pressure.
+if "skeleton_share_stiff_stiff" in t:
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
+    styles = ["-", "--", ":", "-."]
+    for i, p in enumerate(sorted(set(t["pressure_target"][main]))):
+        s = main & (t["pressure_target"] == p)
+        order = np.argsort(t["soft_fraction"][s])
+        nu = t["soft_fraction"][s][order]
+        ls = styles[i % len(styles)]
+        for key, label, c in [("share_stiff_stiff", "stiff–stiff", "C0"),
+                              ("share_stiff_soft", "stiff–soft", "C1"),
+                              ("share_soft_soft", "soft–soft", "C2")]:
+            axes[0].plot(nu, t["skeleton_" + key][s][order], ls, marker="o", ms=3, color=c,
+                         label=f"{label}, P = {p:g} MPa")
+        for key, label, c in [("z_stiff_stiff", "stiff partners of a stiff bead", "C0"),
+                              ("z_stiff_soft", "soft partners of a stiff bead", "C1"),
+                              ("z_soft_stiff", "stiff partners of a soft bead", "C3"),
+                              ("z_soft_soft", "soft partners of a soft bead", "C2")]:
+            axes[1].plot(nu, t["skeleton_" + key][s][order], ls, marker="o", ms=3, color=c,
+                         label=f"{label}, P = {p:g} MPa")
+        # M over the glass packing's M at the same pressure, beside the shares.
+        m0 = t["M"][s & (t["soft_fraction"] == 0) & ok]
+        if m0.size and np.isfinite(m0[0]) and m0[0] > 0:
+            keep = ok[s][order]
+            axes[0].plot(nu[keep], t["M"][s][order][keep] / m0[0], ls, color="k", marker="s",
+                         ms=3, label=f"M / M(ν_r = 0), P = {p:g} MPa")
+        cl = t["skeleton_stiff_largest_cluster"][s][order]
+        wraps = t["skeleton_stiff_wrapping_axes"][s][order]
+        axes[2].plot(nu, cl, ls, color="k", lw=0.8, label=f"P = {p:g} MPa")
+        axes[2].scatter(nu, cl, c=["k" if w == 3 else "white" for w in wraps], edgecolors="k", zorder=3)
+    axes[1].axhline(4, color="k", lw=0.6, ls=":", label="d + 1 = 4: isostatic with friction")
+    axes[0].set_ylabel("share of the pressure; M / M(ν_r = 0)")
+    axes[1].set_ylabel("contacts per particle")
+    axes[2].set_ylabel("largest stiff cluster / stiff beads")
+    for ax in axes:
+        ax.set_xlabel("rubber volume fraction ν_r")
+        ax.legend(fontsize=6)
+    axes[2].set_title("filled: wraps the periodic box along x, y and z", fontsize=8)
+    save(fig, outdir, "skeleton_vs_rubber_fraction.png")
+
 # The table, one row per configuration.
 cols = [("soft_fraction", "ν_r", "{:.2f}"), ("pair_rule_product_over_sum", "rule", "{}"),
         ("pressure", "P (MPa)", "{:.4g}"), ("phi", "φ", "{:.4f}"), ("z_corrected", "Z̄", "{:.2f}"),

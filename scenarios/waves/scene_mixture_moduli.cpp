@@ -22,6 +22,8 @@
 //                  crossing_fraction (background damping time in crossing times, afterwards)
 //   [probe]        amplitude   strain_crossings   relax_crossings   keep_friction = false
 //   [pair_rule_check] soft_volume_fraction   pressures (subsets of the lists above)
+//   [analysis]     skeleton = false (pressure shares, contacts per particle by contact type
+//                  and the stiff network's percolation of every state: mixture_skeleton.hpp)
 //   [run]          dt   skin   max_overlap   rattler_threshold
 #include <Kokkos_Core.hpp>
 #include <algorithm>
@@ -43,6 +45,7 @@
 #include "core/run/rng.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
+#include "scenarios/common/identity_order.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
@@ -51,6 +54,7 @@
 #include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/mixture_materials.hpp"
+#include "scenarios/waves/mixture_skeleton.hpp"
 
 namespace granular {
 
@@ -79,6 +83,7 @@ struct Setup {
   double gas_damping_time = 0, damping_crossings = 0.5;
   double amplitude = 2e-6, strain_crossings = 1, relax_crossings = 2;
   bool keep_friction = false;
+  bool skeleton = false;  // measure the load-bearing skeleton of every state
   double check_fraction = kNaN;
   std::vector<double> check_pressures;
   std::string other_rule;
@@ -164,6 +169,8 @@ Setup read_setup(const SceneFile& s) {
   u.strain_crossings = s.real("probe.strain_crossings", 1.0);
   u.relax_crossings = s.real("probe.relax_crossings", 2.0);
   u.keep_friction = s.flag("probe.keep_friction", false);
+  // Read only where given, so that the summaries of scenes without it stay as they were.
+  if (s.has("analysis.skeleton")) u.skeleton = s.flag("analysis.skeleton");
   s.require(u.amplitude > 0 && u.amplitude < 1e-3, "probe.amplitude", "must lie in (0, 1e-3)");
   s.require(u.strain_crossings > 0, "probe.strain_crossings", "must be positive");
   s.require(u.relax_crossings >= 0, "probe.relax_crossings", "must not be negative");
@@ -277,6 +284,22 @@ Probed probe_state(const ConfigState& c, const MixtureModel& model, const DemPar
   return r;
 }
 
+// The skeleton of the state `sys` holds (mixture_skeleton.hpp) as columns of its table row.
+void add_skeleton_columns(const System& sys, int stiff, std::map<std::string, double>& row) {
+  const ParticleRows p = gather_by_identity(sys.particles());
+  const Skeleton k =
+      measure_skeleton(contact_network(sys), p.species, p.position, sys.box().len, stiff);
+  row["skeleton_share_stiff_stiff"] = k.share[0];
+  row["skeleton_share_stiff_soft"] = k.share[1];
+  row["skeleton_share_soft_soft"] = k.share[2];
+  row["skeleton_z_stiff_stiff"] = k.z_stiff_stiff;
+  row["skeleton_z_stiff_soft"] = k.z_stiff_soft;
+  row["skeleton_z_soft_stiff"] = k.z_soft_stiff;
+  row["skeleton_z_soft_soft"] = k.z_soft_soft;
+  row["skeleton_stiff_largest_cluster"] = k.largest_cluster;
+  row["skeleton_stiff_wrapping_axes"] = k.wrapping_axes;
+}
+
 // Prepares one variant and probes it at each of its pressures; rows go to `out`.
 void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress& progress,
                  long& done) {
@@ -375,6 +398,7 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
         {"isotropic_reversal_residual", pr.reversal},
         {"M_other_rule_same_packing", M_other},
     };
+    if (u.skeleton) add_skeleton_columns(*sys, u.stiff, row);
     out.add_row(v.tag, row);
     progress.update(++done);
     char line[256];
@@ -393,6 +417,15 @@ std::string table_unit(const std::string& column) {
   static const std::map<std::string, std::string> units = {
       {"soft_fraction", "1"},
       {"pair_rule_product_over_sum", "1"},
+      {"skeleton_share_stiff_stiff", "1"},
+      {"skeleton_share_stiff_soft", "1"},
+      {"skeleton_share_soft_soft", "1"},
+      {"skeleton_z_stiff_stiff", "1"},
+      {"skeleton_z_stiff_soft", "1"},
+      {"skeleton_z_soft_stiff", "1"},
+      {"skeleton_z_soft_soft", "1"},
+      {"skeleton_stiff_largest_cluster", "1"},
+      {"skeleton_stiff_wrapping_axes", "1"},
       {"pressure_target", "MPa"},
       {"pressure", "MPa"},
       {"servo_converged", "1"},

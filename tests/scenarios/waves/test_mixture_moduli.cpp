@@ -258,6 +258,22 @@ TEST(MixtureModuliScene, ShippedSceneFilesRead) {
   }
 }
 
+namespace {
+
+// Runs the small mixture study of tests/resume/mixture_moduli.toml, as changed in `text`, into a
+// fresh folder named `name`; returns the folder.
+std::string run_small_mixture(const std::string& text, const std::string& name) {
+  SceneFile scene = SceneFile::parse(text, name + ".toml");
+  scene.text("scene");
+  RunOptions opts;
+  opts.out_dir = granular::testing::temp_dir(name);
+  opts.progress = false, opts.charts = false;
+  run_mixture_moduli(scene, opts);
+  return opts.out_dir;
+}
+
+}  // namespace
+
 // A state the servo did not bring to its target is not probed: its moduli are NaN, it is left
 // out of the fits, and summary.json lists it; `preparation.probe_unconverged = true` probes it
 // as it is. One servo check cannot bring E_kin/E_pot under 1e-12 after the approach, so every
@@ -272,13 +288,8 @@ TEST(MixtureModuliScene, StateTheServoDidNotConvergeToIsNotProbedUnlessAskedFor)
     if (asked)
       granular::testing::replace_once(t, "max_checks = 1",
                                       "max_checks = 1\nprobe_unconverged = true");
-    SceneFile scene = SceneFile::parse(t, "unconverged.toml");
-    scene.text("scene");
-    RunOptions opts;
-    opts.out_dir = granular::testing::temp_dir(asked ? "mixture_asked" : "mixture_refused");
-    opts.progress = false, opts.charts = false;
-    run_mixture_moduli(scene, opts);
-    const H5Reader h5(opts.out_dir + "/results.h5");
+    const std::string out = run_small_mixture(t, asked ? "mixture_asked" : "mixture_refused");
+    const H5Reader h5(out + "/results.h5");
     const auto converged = h5.reals("/table/servo_converged");
     const auto jammed = h5.reals("/table/jammed"), probed = h5.reals("/table/probed");
     const auto M = h5.reals("/table/M"), n = h5.reals("/fits/M_exponent");
@@ -295,9 +306,51 @@ TEST(MixtureModuliScene, StateTheServoDidNotConvergeToIsNotProbedUnlessAskedFor)
     // One pressure per mixture: no exponent either way, but the refused states leave the
     // fit without a single point (its prefactor too is undefined).
     for (double e : n) EXPECT_TRUE(std::isnan(e));
-    const std::string summary = granular::testing::read_text(opts.out_dir + "/summary.json");
+    const std::string summary = granular::testing::read_text(out + "/summary.json");
     EXPECT_NE(summary.find("\"unconverged_states\": ["), std::string::npos);
     EXPECT_NE(summary.find(asked ? "\"probed\": true" : "\"probed\": false"), std::string::npos);
-    std::filesystem::remove_all(opts.out_dir);
+    std::filesystem::remove_all(out);
+  }
+}
+
+// [analysis] skeleton = true adds the skeleton of every state to the table (and nothing
+// without it): the pressure shares of the three contact types add up to 1, glass alone carries
+// all of it on glass–glass contacts, and in the half-rubber mixture (16 of each bead) every
+// glass–rubber contact is counted once from each side, so glass beads have as many rubber
+// partners as rubber beads have glass partners.
+TEST(MixtureModuliScene, SkeletonColumnsAddUpAndCountEachUnlikeContactFromBothSides) {
+  const std::string text = granular::testing::read_text(std::string(GRANULAR_SOURCE_DIR) +
+                                                        "/tests/resume/mixture_moduli.toml");
+  for (const bool asked : {false, true}) {
+    const std::string out =
+        run_small_mixture(asked ? text + "\n[analysis]\nskeleton = true\n" : text,
+                          asked ? "mixture_skeleton" : "mixture_no_skeleton");
+    const H5Reader h5(out + "/results.h5");
+    if (!asked) {
+      EXPECT_FALSE(h5.has("/table/skeleton_share_stiff_stiff"));
+      std::filesystem::remove_all(out);
+      continue;
+    }
+    const auto nu = h5.reals("/table/soft_fraction");
+    const auto gg = h5.reals("/table/skeleton_share_stiff_stiff");
+    const auto gr = h5.reals("/table/skeleton_share_stiff_soft");
+    const auto rr = h5.reals("/table/skeleton_share_soft_soft");
+    const auto z_gr = h5.reals("/table/skeleton_z_stiff_soft");
+    const auto z_rg = h5.reals("/table/skeleton_z_soft_stiff");
+    const auto cluster = h5.reals("/table/skeleton_stiff_largest_cluster");
+    ASSERT_EQ(nu.size(), 3u);  // glass, and the half-rubber mixture under both pair rules
+    for (size_t i = 0; i < nu.size(); ++i) {
+      EXPECT_NEAR(gg[i] + gr[i] + rr[i], 1.0, 1e-12) << i;
+      EXPECT_GT(cluster[i], 0.0) << i;
+      EXPECT_LE(cluster[i], 1.0) << i;
+      if (nu[i] == 0.0) {
+        EXPECT_EQ(gg[i], 1.0);
+        EXPECT_TRUE(std::isnan(z_rg[i]));  // no rubber beads
+      } else {
+        EXPECT_GT(gr[i], 0.0) << i;
+        EXPECT_EQ(z_gr[i], z_rg[i]) << i;  // 16 glass and 16 rubber beads
+      }
+    }
+    std::filesystem::remove_all(out);
   }
 }
