@@ -51,16 +51,20 @@ const SceneEntry& entry_named(const std::string& name) {
   throw std::runtime_error("no scene " + name);
 }
 
+// The scene `text`, written to `path` and read back as a run reads it.
+SceneFile scene_written(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+  SceneFile scene = SceneFile::load(path);
+  scene.text("scene");
+  return scene;
+}
+
 // The shipped isotropic compression with a time step its guard refuses once the run has begun
 // its outputs (the system is built after begin_outputs).
 SceneFile too_fast_compression(const std::string& dir) {
   std::string text = granular::testing::shipped_scene("isotropic_compression.toml");
   granular::testing::replace_once(text, "dt = 0.004", "dt = 0.4");
-  const std::string path = dir + "/too_fast.toml";
-  std::ofstream(path) << text;
-  SceneFile scene = SceneFile::load(path);
-  scene.text("scene");
-  return scene;
+  return scene_written(dir + "/too_fast.toml", text);
 }
 
 // One small two-particle run through the CLI's path (driver, run record, report), shared by
@@ -282,10 +286,7 @@ TEST_F(RunReport, RunStoppedAtItsCheckpointIsReportedStoppedWithoutASummary) {
   if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3: no report";
   std::string text = granular::testing::small_isotropic_scene() + "stop_after = 1000\n";
   granular::testing::replace_once(text, "checkpoint_every = 2000", "checkpoint_every = 1000");
-  const std::string path = dir_ + "/stopped.toml";
-  std::ofstream(path) << text;
-  SceneFile scene = SceneFile::load(path);
-  scene.text("scene");
+  SceneFile scene = scene_written(dir_ + "/stopped.toml", text);
   RunOptions opts;
   opts.out_dir = dir_ + "/out_stopped";
   opts.progress = false, opts.charts = false;
