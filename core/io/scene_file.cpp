@@ -250,6 +250,12 @@ bool SceneFile::flag(const std::string& key) const {
 }
 
 std::vector<double> SceneFile::reals(const std::string& key) const {
+  std::vector<double> out = reals_in_file(key);
+  if (out.empty()) fail(key, "must not be empty");
+  return out;
+}
+
+std::vector<double> SceneFile::reals_in_file(const std::string& key) const {
   kind(key, "numbers");
   const toml::node* n = as_node(find(key));
   if (!n) fail(key, "is missing (an array of numbers is required)");
@@ -264,8 +270,7 @@ std::vector<double> SceneFile::reals(const std::string& key) const {
     out.push_back(*v);
     text += (out.size() > 1 ? ", " : "") + format_real(*v);
   }
-  if (out.empty()) fail(key, "must not be empty");
-  note(key, text + "]");
+  if (!out.empty()) note(key, text + "]");  // an empty list is noted by the caller that allows it
   return out;
 }
 
@@ -361,11 +366,25 @@ bool SceneFile::flag(const std::string& key, bool def) const {
   return def;
 }
 std::vector<double> SceneFile::reals(const std::string& key, const std::vector<double>& def) const {
+  return reals_with_default(key, def, false);
+}
+std::vector<double> SceneFile::reals_or_none(const std::string& key,
+                                             const std::vector<double>& def) const {
+  return reals_with_default(key, def, true);
+}
+std::vector<double> SceneFile::reals_with_default(const std::string& key,
+                                                  const std::vector<double>& def,
+                                                  bool may_be_empty) const {
   std::string text = "[";
   for (size_t i = 0; i < def.size(); ++i) text += (i ? ", " : "") + format_real(def[i]);
   offer(key, text + "]");
   kind(key, "numbers");
-  if (find(key)) return reals(key);
+  if (find(key)) {
+    if (!may_be_empty) return reals(key);
+    const std::vector<double> out = reals_in_file(key);
+    if (out.empty()) note(key, "[]");
+    return out;
+  }
   note(key, text + "]");
   return def;
 }

@@ -43,6 +43,8 @@ class SceneFile {
   std::string text(const std::string& key, const std::string& def) const;
   bool flag(const std::string& key, bool def) const;
   std::vector<double> reals(const std::string& key, const std::vector<double>& def) const;
+  // The same where an empty array is a meaningful choice (an empty list switches a part off).
+  std::vector<double> reals_or_none(const std::string& key, const std::vector<double>& def) const;
   bool has(const std::string& key) const;
   // A path to an input the scene reads (a file, or a folder where `folder` is true). A relative
   // path is resolved from the folder of the scene file, so a scene copied together with its
@@ -101,6 +103,10 @@ class SceneFile {
   void note(const std::string& key, const std::string& value) const;
   void kind(const std::string& key, const char* kind) const;
   void offer(const std::string& key, const std::string& default_value) const;
+  // An array of numbers as the file gives it, noted when not empty.
+  std::vector<double> reals_in_file(const std::string& key) const;
+  std::vector<double> reals_with_default(const std::string& key, const std::vector<double>& def,
+                                         bool may_be_empty) const;
 
   std::string path_;
   std::shared_ptr<Document> doc_;

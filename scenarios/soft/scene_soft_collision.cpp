@@ -10,6 +10,7 @@
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
+#include "core/run/error.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/common/scene_output.hpp"
@@ -67,10 +68,19 @@ Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, i
   const auto t0 = std::chrono::steady_clock::now();
   sample();
   const long steps = static_cast<long>(duration / dt);
+  // A model that breaks down (passes the overlap limit, or its forces stop being finite) ends
+  // its own curve, not the scene: the curve up to there and the reason are kept, as in
+  // confined_compression.
+  std::string failure;
   for (long s = 0; s < steps; s += every) {
-    sys.step(std::min(every, steps - s));
+    try {
+      sys.step(std::min(every, steps - s));
+      sys.check_health(sys.measure());
+    } catch (const PhysicsError& e) {
+      failure = e.what();
+      break;
+    }
     sample();
-    sys.check_health(sys.measure());
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_quantity(h5, group + "/time", t, "us");
@@ -82,6 +92,10 @@ Json run_one(const Model& model, const MultiContact& mc, const Layout& layout, i
   j["max_centre_overlap_over_radius"] = max_overlap / a;
   j["kinetic_energy_final_over_initial"] = ekin.back() / ekin.front();
   j["wall_seconds"] = wall;
+  if (!failure.empty()) {
+    j["ended_early"] = failure;
+    std::cerr << group << ": ended at t = " << t.back() << ": " << failure << "\n";
+  }
   std::cout << group << ": largest centre overlap / a = " << max_overlap / a
             << ", final / initial kinetic energy " << ekin.back() / ekin.front() << " (" << wall
             << " s)\n";

@@ -3,6 +3,7 @@
 // (docs/model_multicontact.md §2-4), read from
 //   [multicontact]  classical = true   strain_gamma = [1.0, 1.12]   stress_beta = [1.0, 1.65]
 //                   own_contact = false   mean = false   walls = true
+// (an empty list runs no model of its kind; at least one model must remain)
 // The three options are the choices the source leaves open; their values go to summary.json
 // with the other parameters.
 #pragma once
@@ -47,8 +48,10 @@ inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const Materia
     return o.str();
   };
   if (s.flag("multicontact.classical", true)) out.push_back({"classical", base});
-  const std::vector<double> gammas = s.reals("multicontact.strain_gamma", {1.0});
-  const std::vector<double> betas = s.reals("multicontact.stress_beta", {1.0});
+  // An empty list runs no model of that kind (classical = true with both lists empty: the
+  // classical model alone).
+  const std::vector<double> gammas = s.reals_or_none("multicontact.strain_gamma", {1.0});
+  const std::vector<double> betas = s.reals_or_none("multicontact.stress_beta", {1.0});
   s.require_distinct("multicontact.strain_gamma", gammas);
   s.require_distinct("multicontact.stress_beta", betas);
   for (double g : gammas) {
@@ -65,6 +68,8 @@ inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const Materia
     sm.mc.mode = MultiContact::Stress, sm.mc.beta = b;
     out.push_back(sm);
   }
+  s.require(!out.empty(), "multicontact.classical",
+            "is false and strain_gamma and stress_beta are empty: no model to run");
   return out;
 }
 

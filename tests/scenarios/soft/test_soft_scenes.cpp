@@ -119,3 +119,54 @@ TEST(ConfinedCompressionScene, ErrorsNameTheKeyAndTheFile) {
     EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
   }
 }
+
+// Elastic rubber at 15 m/s presses classical Hertz past the scene's overlap limit of 1.3 a
+// (0.98 a at 10 m/s, and the Hertz overlap grows as v^(4/5)); hydrogel stays below it (0.70 a
+// at 10 m/s). The rubber curve ends there with the reason in summary.json, and the scene goes
+// on to the other runs (it used to stop the scene). Empty multi-contact lists run the
+// classical model alone.
+TEST(SoftCollisionScene, ModelPastTheOverlapLimitEndsItsOwnCurveNotTheScene) {
+  std::string text = classical_collision_scene();
+  replace_once(text, "restitution = 0.95", "restitution = 1.0");
+  replace_once(text, "restitution = 0.7", "restitution = 1.0");
+  replace_once(text, "speed = 0.01 ", "speed = 0.015 ");
+  replace_once(text, "strain_gamma = [1.0]", "strain_gamma = []");
+  replace_once(text, "stress_beta = [1.0]", "stress_beta = []");
+  RunOptions opts;
+  opts.out_dir = temp_dir("soft_past_limit");
+  opts.progress = false, opts.charts = false;
+  ASSERT_NO_THROW(run_soft_collision(parse(text, "soft_past_limit.toml"), opts));
+  const std::string summary = granular::testing::read_text(opts.out_dir + "/summary.json");
+  const auto rubber = summary.find("\"three/rubber/classical\"");
+  const auto hydrogel = summary.find("\"three/hydrogel/classical\"");
+  ASSERT_NE(rubber, std::string::npos) << summary;
+  ASSERT_NE(hydrogel, std::string::npos) << summary;
+  const auto ended = summary.find("\"ended_early\"", rubber);
+  ASSERT_NE(ended, std::string::npos) << summary;
+  EXPECT_LT(ended, summary.find('}', rubber));  // in the rubber run's own entry
+  EXPECT_EQ(summary.find("\"ended_early\"", hydrogel) < summary.find('}', hydrogel), false);
+  EXPECT_EQ(summary.find("mc_strain"), std::string::npos);  // no multi-contact model ran
+  EXPECT_EQ(summary.find("mc_stress"), std::string::npos);
+  const H5Reader r(opts.out_dir + "/results.h5");
+  const auto t = r.reals("/runs/three/rubber/classical/time");
+  const auto th = r.reals("/runs/three/hydrogel/classical/time");
+  EXPECT_LT(t.size(), th.size());  // the rubber curve stops at the limit
+}
+
+// A model list may be empty; no model at all is refused, naming the key.
+TEST(SoftCollisionScene, NoModelAtAllIsRefusedNamingTheKey) {
+  std::string text = shipped_scene("soft_collision.toml");
+  replace_once(text, "classical = true", "classical = false");
+  replace_once(text, "strain_gamma = [1.0]", "strain_gamma = []");
+  replace_once(text, "stress_beta = [1.0]", "stress_beta = []");
+  RunOptions opts;
+  opts.check_only = true;
+  try {
+    run_soft_collision(parse(text, "no_model.toml"), opts);
+    FAIL() << "a scene without a model was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("multicontact.classical"), std::string::npos) << e.what();
+  }
+  replace_once(text, "classical = false", "classical = true");
+  EXPECT_NO_THROW(run_soft_collision(parse(text, "classical_only.toml"), opts));
+}
