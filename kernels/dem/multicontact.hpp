@@ -38,6 +38,10 @@ struct MultiContact {
   bool mean = false;
   // Whether particle-wall contacts take part (they deform the particle like any other).
   bool walls = true;
+  // MC-stress: the area A of beta nu A P, which the source names without a formula
+  // (docs/model_multicontact.md): the Hertz contact area pi R* delta (default, the literal
+  // reading) or a particle-scale area pi R*^2.
+  enum Area { HertzArea, ParticleArea } area = HertzArea;
   double young[kMaxSpecies] = {}, poisson[kMaxSpecies] = {};
 
   // Throws InputError unless the materials of the species in use fit the chosen law.
@@ -70,6 +74,9 @@ struct MultiContact {
 // with `own_contact` the pair's own term counts as one more. MC-strain adds no instantaneous
 // stiffness: its correction uses the previous step's forces, and the pair law is evaluated at
 // the corrected overlap, which the run keeps below max_overlap (DemSystem::check_health).
+// With the particle-scale area A = pi R*^2 the area no longer grows with the contact's own
+// overlap, and A is at most 1/mu times the Hertz area at the bound: the second term alone,
+// without the factor mu, (3/2) beta nu f (Z - 1) k.
 inline double stiffness_factor(const MultiContact& mc, double max_overlap) {
   if (mc.mode != MultiContact::Stress) return 1.0;
   constexpr double kissing = 12;
@@ -77,6 +84,7 @@ inline double stiffness_factor(const MultiContact& mc, double max_overlap) {
   for (double v : mc.poisson) nu = std::max(nu, v);
   const double f = mc.mean ? 1.0 / 6.0 : 1.0 / 3.0;
   const double others = mc.own_contact ? kissing : kissing - 1;
+  if (mc.area == MultiContact::ParticleArea) return 1.0 + 1.5 * mc.beta * nu * f * others;
   return 1.0 + 2.5 * mc.beta * nu * f * max_overlap * others;
 }
 
@@ -159,6 +167,11 @@ struct StrainMaterials {
 };
 
 KOKKOS_INLINE_FUNCTION double sphere_volume(double a) { return 4.0 / 3.0 * M_PI * a * a * a; }
+// The length L of the MC-stress area A = pi R* L: the overlap delta (the Hertz contact area)
+// or R* itself (a particle-scale area, MultiContact::ParticleArea).
+KOKKOS_INLINE_FUNCTION double stress_area_length(bool particle_area, const PairState& s) {
+  return particle_area ? reduced_radius(s) : s.delta;
+}
 
 // Pair pass of MC-strain: the normal law sees delta + S_i(c) + S_j(c), the corrections both
 // bodies' other contacts cause at the contact (both spheres deform, each with its own E, nu;
@@ -211,6 +224,7 @@ struct StressPairHook {
   Kokkos::View<double**, Kokkos::LayoutRight, Mem> rows;
   double nu[kMaxSpecies];
   double beta;
+  bool particle_area = false;  // MultiContact::ParticleArea
   template <class Model>
   KOKKOS_INLINE_FUNCTION void evaluate(const Model& m, int k, const PairState& s, double dt,
                                        double* h, PairForce& out) const {
@@ -219,9 +233,10 @@ struct StressPairHook {
     rows(k, kTi) = -(s.ai - 0.5 * s.delta) * out.fn;
     rows(k, kTj) = -(s.aj - 0.5 * s.delta) * out.fn;
     for (int d = 0; d < 3; ++d) rows(k, kTN + d) = s.n[d];
-    // Hertz contact area A = pi R* delta; nu of the pair: mean of the two species.
+    // Area A = pi R* delta (Hertz) or pi R*^2; nu of the pair: mean of the two species.
     const double nu_ij = 0.5 * (nu[s.si] + nu[s.sj]);
-    rows(k, kTCoef) = beta * nu_ij * M_PI * reduced_radius(s) * s.delta;
+    rows(k, kTCoef) =
+        beta * nu_ij * M_PI * reduced_radius(s) * stress_area_length(particle_area, s);
   }
   KOKKOS_INLINE_FUNCTION void apart(int k) const {
     rows(k, kTi) = 0.0, rows(k, kTj) = 0.0, rows(k, kTCoef) = 0.0;
@@ -239,11 +254,13 @@ struct StressWallHook {
   Kokkos::View<double*, Mem> trace;                      // (n): sum_c l.f (not divided by V)
   double nu[kMaxSpecies];
   double beta, exclude;  // exclude = 1: the contact's own term leaves the trace
+  bool particle_area = false;
   template <class Model>
   KOKKOS_INLINE_FUNCTION void evaluate(const Model& m, int i, int w, const PairState& s, double dt,
                                        double* h, PairForce& out) const {
     m.evaluate(s, dt, h, out);
-    const double coef = beta * nu[s.si] * M_PI * reduced_radius(s) * s.delta;
+    const double coef =
+        beta * nu[s.si] * M_PI * reduced_radius(s) * stress_area_length(particle_area, s);
     const double tr = (trace(i) - exclude * own(i, w)) / sphere_volume(s.ai);
     // sigma = (1/V) sum l (x) f is tension-positive: repulsive contacts make its trace
     // negative. P is compression-positive, so that a squeezed particle gets stiffer.
@@ -335,6 +352,7 @@ class MultiContactForces {
       multicontact::StressPairHook<mem> hook;
       hook.rows = entry_;
       hook.beta = opt_.beta;
+      hook.particle_area = opt_.area == MultiContact::ParticleArea;
       for (int s = 0; s < kMaxSpecies; ++s) hook.nu[s] = opt_.poisson[s];
       compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
       stress_traces(p, nl, walls, nmc, wall_history, model, dt);
@@ -345,6 +363,7 @@ class MultiContactForces {
         wh.own = wall_, wh.trace = trace_;
         for (int s = 0; s < kMaxSpecies; ++s) wh.nu[s] = opt_.poisson[s];
         wh.beta = opt_.beta, wh.exclude = opt_.own_contact ? 0.0 : 1.0;
+        wh.particle_area = opt_.area == MultiContact::ParticleArea;
         add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt, wh);
       } else if (external) {
         add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt);

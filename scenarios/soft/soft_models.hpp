@@ -2,7 +2,7 @@
 // prefactors gamma and MC-stress with a list of prefactors beta
 // (docs/model_multicontact.md §2-4), read from
 //   [multicontact]  classical = true   strain_gamma = [1.0, 1.12]   stress_beta = [1.0, 1.65]
-//                   own_contact = false   mean = false   walls = true
+//                   own_contact = false   mean = false   walls = true   stress_area = "hertz"
 // (an empty list runs no model of its kind; at least one model must remain)
 // The three options are the choices the source leaves open; their values go to summary.json
 // with the other parameters.
@@ -40,6 +40,10 @@ inline std::vector<SoftModel> read_soft_models(const SceneFile& s, const Materia
   base.own_contact = s.flag("multicontact.own_contact", false);
   base.mean = s.flag("multicontact.mean", false);
   base.walls = s.flag("multicontact.walls", true);
+  const std::string area = s.text("multicontact.stress_area", "hertz");
+  s.require(area == "hertz" || area == "particle", "multicontact.stress_area",
+            "must be \"hertz\" (pi R* delta) or \"particle\" (pi R*^2)");
+  base.area = area == "particle" ? MultiContact::ParticleArea : MultiContact::HertzArea;
   base = with_materials(base, m);
   std::vector<SoftModel> out;
   auto label = [](const char* what, double v) {

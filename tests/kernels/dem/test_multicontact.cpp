@@ -357,6 +357,40 @@ TYPED_TEST(MultiContactTest, StressCorrectionMatchesHandEvaluationForWallAndSphe
   }
 }
 
+// The same geometry with the particle-scale area of MC-stress (stress_area = "particle"): each
+// correction is beta nu pi R*^2 P instead of beta nu pi R* delta P, R*/delta = 9.5 times
+// larger here.
+TYPED_TEST(MultiContactTest, StressParticleAreaCorrectionMatchesHandEvaluationForWallAndSphere) {
+  using Exec = TypeParam;
+  const double a = kA, aa = 0.5 * kA, dw = 0.06 * a, d1 = 0.07 * aa;
+  const double zb = a - dw;
+  const HostParticles h = particles({{-(a + aa - d1), 0, zb, aa, 0}, {0, 0, zb, a, 0}});
+  DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(h), open_box(-5 * a, 10 * a),
+                             frictionless(), params());
+  sys.set_walls({floor_wall()});
+  MultiContact mc = law(MultiContact::Stress);
+  mc.area = MultiContact::ParticleArea;
+  sys.set_multicontact(mc);
+  const double rs_pair = a * aa / (a + aa);
+  const double f1 = hertz_force(estar_pair(kE, kNu, kE, kNu), rs_pair, d1);
+  const double fw = hertz_force(kE / (1 - kNu * kNu), a, dw);
+  const double vb = 4.0 / 3.0 * M_PI * a * a * a;
+  const double p_ab = (a - 0.5 * dw) * fw / (3 * vb);
+  const double p_w = (a - 0.5 * d1) * f1 / (3 * vb);
+  const double fa = f1 + mc.beta * kNu * M_PI * rs_pair * rs_pair * p_ab;
+  const double fb = fw + mc.beta * kNu * M_PI * a * a * p_w;
+  const double fa_hertz = f1 + mc.beta * kNu * M_PI * rs_pair * d1 * p_ab;
+  EXPECT_GT(fa - f1, 9 * (fa_hertz - f1));  // the two readings differ by R*/delta = 9.5
+  const auto f = forces(sys);
+  EXPECT_NEAR(-f[0], fa, 1e-12 * fa);
+  EXPECT_EQ(f[3], -f[0]);  // action and reaction, exactly
+  EXPECT_NEAR(f[5], fb, 1e-12 * fb);
+  // The time-step guard's allowance no longer scales with the largest overlap.
+  EXPECT_EQ(stiffness_factor(mc, 0.1), stiffness_factor(mc, 0.5));
+  mc.area = MultiContact::HertzArea;
+  EXPECT_LT(stiffness_factor(mc, 0.1), stiffness_factor(mc, 0.5));
+}
+
 TYPED_TEST(MultiContactTest, BothCorrectionsConserveMomentumToRoundOff) {
   using Exec = TypeParam;
   const HostParticles h = cluster(3, 1.86 * kA, 0.3, 7);
