@@ -30,10 +30,8 @@ class SceneOutput {
   SceneOutput(const SceneOutput&) = delete;
   SceneOutput& operator=(const SceneOutput&) = delete;
 
-  const std::string& dir() const { return opts_.out_dir; }
-  // <dir>/<name>.
+  // <out_dir>/<name>.
   std::string path(const std::string& name) const { return opts_.out_dir + "/" + name; }
-  const RunOptions& options() const { return opts_; }
 
   // results.h5, built under a hidden name until it is committed (on first use).
   H5Writer& h5();
