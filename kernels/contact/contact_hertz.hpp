@@ -25,8 +25,7 @@ struct HertzNormal {
   }
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
     const Params& q = table(s.si, s.sj);
-    const double root = Kokkos::Experimental::sqrt(length(q, s) * s.delta);
-    return root * (q.K * s.delta + q.G * s.delta_dot);
+    return hertz_force(q.K, q.G, length(q, s), s.delta, s.delta_dot);
   }
   KOKKOS_INLINE_FUNCTION double elastic_force(const PairState& s, const double*) const {
     const Params& q = table(s.si, s.sj);

@@ -37,9 +37,9 @@ struct HertzRestitutionNormal {
 
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double*) const {
     const Params& q = table(s.si, s.sj);
-    const double r = Kokkos::Experimental::sqrt(reduced_radius(s) * s.delta);
-    const double kr = q.K * r;
-    return kr * s.delta + q.alpha * Kokkos::Experimental::sqrt(s.mstar * kr) * s.delta_dot;
+    double r;
+    return hertz_restitution_force(q.K, q.alpha, reduced_radius(s), s.mstar, s.delta, s.delta_dot,
+                                   r);
   }
   KOKKOS_INLINE_FUNCTION double elastic_force(const PairState& s, const double*) const {
     const Params& q = table(s.si, s.sj);

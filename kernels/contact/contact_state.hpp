@@ -70,18 +70,6 @@ struct PairState {
   bool wall;         // partner is a planar wall: infinite radius and mass
 };
 
-// Reduced radius R* = a_i a_j/(a_i + a_j); a wall has infinite radius, so R* = a_i exactly.
-// In the pair kernels `wall` is a constant false, so the branch folds away.
-KOKKOS_INLINE_FUNCTION double reduced_radius(const PairState& s) {
-  return s.wall ? s.ai : s.ai * s.aj / (s.ai + s.aj);
-}
-// The pair length d = a_i + a_j of the "stiffness" Hertz/Mindlin forms. It equals 4 R* for
-// equal spheres; a wall contact takes 4 R* = 4 a_i, which keeps the ratio between the
-// stiffness and modulus forms of a wall contact the same as for a pair of equal spheres.
-KOKKOS_INLINE_FUNCTION double pair_diameter(const PairState& s) {
-  return s.wall ? 4.0 * s.ai : s.ai + s.aj;
-}
-
 KOKKOS_INLINE_FUNCTION double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
@@ -115,6 +103,18 @@ constexpr double kSpringAlongNormal = 1e-6;
 #undef LANE_T
 #undef LANE_M
 #undef LANE_FN
+
+// Reduced radius R* = a_i a_j/(a_i + a_j); a wall has infinite radius, so R* = a_i exactly.
+// In the pair kernels `wall` is a constant false, so the branch folds away.
+KOKKOS_INLINE_FUNCTION double reduced_radius(const PairState& s) {
+  return s.wall ? s.ai : reduced_pair(s.ai, s.aj);
+}
+// The pair length d = a_i + a_j of the "stiffness" Hertz/Mindlin forms. It equals 4 R* for
+// equal spheres; a wall contact takes 4 R* = 4 a_i, which keeps the ratio between the
+// stiffness and modulus forms of a wall contact the same as for a pair of equal spheres.
+KOKKOS_INLINE_FUNCTION double pair_diameter(const PairState& s) {
+  return s.wall ? 4.0 * s.ai : s.ai + s.aj;
+}
 
 KOKKOS_INLINE_FUNCTION void rotate_into_plane(double s[3], const double n[3]) {
   rotate_into_plane_lanes(s, n, true);

@@ -53,10 +53,9 @@ struct CoulombTangential {
                                     double f[3]) const {
     const Params& q = table(s.si, s.sj);
     const double c = scale(q, s);
-    const double k = q.kt * c;
     // The restitution law scales its dashpot with sqrt(m* k_t) instead of sqrt(L delta).
-    const double g =
-        q.law == MindlinRestitution ? q.gt * Kokkos::Experimental::sqrt(s.mstar * k) : q.gt * c;
+    double k = q.kt * c, g = q.gt * c;
+    if (q.law == MindlinRestitution) mindlin_restitution_spring(q.kt, q.gt, c, s.mstar, k, g);
     rotate_into_plane(h, s.n);
     for (int d = 0; d < 3; ++d) h[d] += s.vt[d] * dt;
     // The restitution law's g/k changes with the overlap: its spring keeps no dashpot share

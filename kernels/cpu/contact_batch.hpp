@@ -1,7 +1,8 @@
 // Contacts evaluated in batches, four per instruction, for the host one-pass force kernel
-// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs) and the law of the frictional peer
-// benchmark and the linear element tests: linear normal spring-dashpot with the constant
-// Coulomb tangential spring, no rolling.
+// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs), for two laws (BatchLaw): the
+// frictional peer benchmark's and the linear element tests' (linear normal spring-dashpot with
+// the constant Coulomb tangential spring), and the studies' restitution-damped Hertz-Mindlin
+// law (waves, mixtures, Hertz element tests); no rolling.
 //
 // A slab's rows are read in order; the touching contacts of whole rows are gathered into a
 // batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
@@ -33,8 +34,57 @@
 
 namespace granular {
 
+// The laws the batch evaluates: the linear normal spring-dashpot with the constant Coulomb
+// spring; the restitution-damped Hertz law with the restitution-damped Mindlin spring (the
+// studies' law: kernels/contact/contact_hertz_restitution.hpp, CoulombTangential::
+// MindlinRestitution), which also reads the particles' masses; and the visco-elastic Hertz law
+// (kernels/contact/contact_hertz.hpp) with the constant or an L-delta Mindlin spring, in the
+// form (BatchForm) that every pair shares.
+enum class BatchLaw { Linear, HertzRestitution, Hertz };
+
+// The visco-elastic Hertz law's form, one for every pair: the normal force's length (R* or
+// a_i + a_j) and the tangential spring's law (Constant, MindlinPairDiameter or
+// MindlinReducedRadius).
+struct BatchForm {
+  bool reduced_radius = false;
+  int tangential = CoulombTangential::Constant;
+};
+
+// A pair's parameters in the batch's six slots: the normal law's two (linear: k_n, gamma_n;
+// Hertz: K, alpha) and the tangential spring's four (k_t, gamma_t or their coefficients, mu_s,
+// mu_d).
+struct BatchParams {
+  double kn = 0, gn = 0, kt = 0, gt = 0, mus = 0, mud = 0;
+};
+
+namespace contact_batch_detail {
+inline bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+inline bool same_bits(const BatchParams& a, const BatchParams& b) {
+  return same_bits(a.kn, b.kn) && same_bits(a.gn, b.gn) && same_bits(a.kt, b.kt) &&
+         same_bits(a.gt, b.gt) && same_bits(a.mus, b.mus) && same_bits(a.mud, b.mud);
+}
+// Whether every pair's tangential spring follows `law`.
+inline bool every_tangential_law(const CoulombTangential& t, int law) {
+  for (int a = 0; a < kMaxSpecies; ++a)
+    for (int b = 0; b < kMaxSpecies; ++b)
+      if (t.table.p[a][b].law != law) return false;
+  return true;
+}
+// Whether every pair has the batch parameters of pair (0, 0), bit for bit (so that
+// broadcasting them changes no result, not even the sign of a zero).
+template <class Law, class Model>
+bool uniform_pairs(const Model& m) {
+  const BatchParams p0 = Law::pair(m, 0, 0);
+  for (int a = 0; a < kMaxSpecies; ++a)
+    for (int b = 0; b < kMaxSpecies; ++b)
+      if (!same_bits(Law::pair(m, a, b), p0)) return false;
+  return true;
+}
+}  // namespace contact_batch_detail
+
 // Which models have a batched evaluation (compile time), and whether this instance's
-// parameters allow it (run time: the Mindlin forms of the tangential spring do not).
+// parameters allow it (run time: the batch limits the spring with the total normal force, and
+// evaluates one form of the tangential spring per law).
 template <class Model>
 struct ContactBatchLaw {
   static constexpr bool available = false;
@@ -43,38 +93,81 @@ struct ContactBatchLaw {
 };
 template <>
 struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
+  using Model = ContactModel<LinearNormal, CoulombTangential>;
   static constexpr bool available = GRANULAR_CONTACT_BATCH;
-  static bool usable(const ContactModel<LinearNormal, CoulombTangential>& m) {
-    if (m.coulomb_elastic_normal) return false;  // the batch limits with the total force
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b)
-        if (m.tangential.table.p[a][b].law != CoulombTangential::Constant) return false;
-    return true;
+  static constexpr BatchLaw law = BatchLaw::Linear;
+  static bool usable(const Model& m) {
+    return !m.coulomb_elastic_normal &&
+           contact_batch_detail::every_tangential_law(m.tangential, CoulombTangential::Constant);
   }
-  // Whether every pair has the parameters of pair (0, 0), bit for bit (so that broadcasting
-  // them changes no result, not even the sign of a zero).
-  static bool uniform(const ContactModel<LinearNormal, CoulombTangential>& m) {
-    if (!uniform_normal(m.normal)) return false;
-    const CoulombTangential::Params& t0 = m.tangential.table.p[0][0];
-    for (int a = 0; a < kMaxSpecies; ++a)
-      for (int b = 0; b < kMaxSpecies; ++b) {
-        const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-        if (!same_bits(t.kt, t0.kt) || !same_bits(t.gt, t0.gt) || !same_bits(t.mu_s, t0.mu_s) ||
-            !same_bits(t.mu_d, t0.mu_d))
-          return false;
-      }
-    return true;
+  static BatchParams pair(const Model& m, int a, int b) {
+    const LinearNormal::Params& n = m.normal.table.p[a][b];
+    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+    return {n.kn, n.gn, t.kt, t.gt, t.mu_s, t.mu_d};
   }
-  static bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-  // Whether every pair has the normal parameters of pair (0, 0), bit for bit.
+  static bool uniform(const Model& m) {
+    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
+  }
+  static BatchForm form(const Model&) { return {}; }
+  // Whether every pair has the normal parameters of pair (0, 0), bit for bit (the
+  // frictionless law's stream, kernels/cpu/near_stream.hpp).
   static bool uniform_normal(const LinearNormal& l) {
     const LinearNormal::Params& n0 = l.table.p[0][0];
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = 0; b < kMaxSpecies; ++b) {
         const LinearNormal::Params& n = l.table.p[a][b];
-        if (!same_bits(n.kn, n0.kn) || !same_bits(n.gn, n0.gn)) return false;
+        if (!contact_batch_detail::same_bits(n.kn, n0.kn) ||
+            !contact_batch_detail::same_bits(n.gn, n0.gn))
+          return false;
       }
     return true;
+  }
+};
+template <>
+struct ContactBatchLaw<ContactModel<HertzRestitutionNormal, CoulombTangential>> {
+  using Model = ContactModel<HertzRestitutionNormal, CoulombTangential>;
+  static constexpr bool available = GRANULAR_CONTACT_BATCH;
+  static constexpr BatchLaw law = BatchLaw::HertzRestitution;
+  static bool usable(const Model& m) {
+    return !m.coulomb_elastic_normal && contact_batch_detail::every_tangential_law(
+                                            m.tangential, CoulombTangential::MindlinRestitution);
+  }
+  static BatchParams pair(const Model& m, int a, int b) {
+    const HertzRestitutionNormal::Params& n = m.normal.table.p[a][b];
+    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+    return {n.K, n.alpha, t.kt, t.gt, t.mu_s, t.mu_d};
+  }
+  static bool uniform(const Model& m) {
+    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
+  }
+  static BatchForm form(const Model&) { return {}; }
+};
+template <>
+struct ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>> {
+  using Model = ContactModel<HertzNormal, CoulombTangential>;
+  static constexpr bool available = GRANULAR_CONTACT_BATCH;
+  static constexpr BatchLaw law = BatchLaw::Hertz;
+  // One form for every pair, and a spring whose dashpot scales as its stiffness (the
+  // restitution-damped spring belongs to HertzRestitutionNormal).
+  static bool usable(const Model& m) {
+    const BatchForm f = form(m);
+    if (m.coulomb_elastic_normal || f.tangential == CoulombTangential::MindlinRestitution)
+      return false;
+    for (int a = 0; a < kMaxSpecies; ++a)
+      for (int b = 0; b < kMaxSpecies; ++b)
+        if (m.normal.table.p[a][b].reduced_radius != f.reduced_radius) return false;
+    return contact_batch_detail::every_tangential_law(m.tangential, f.tangential);
+  }
+  static BatchParams pair(const Model& m, int a, int b) {
+    const HertzNormal::Params& n = m.normal.table.p[a][b];
+    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+    return {n.K, n.G, t.kt, t.gt, t.mu_s, t.mu_d};
+  }
+  static bool uniform(const Model& m) {
+    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
+  }
+  static BatchForm form(const Model& m) {
+    return {m.normal.table.p[0][0].reduced_radius, m.tangential.table.p[0][0].law};
   }
 };
 
@@ -101,7 +194,8 @@ struct ContactBatch {
   // One parameter set for every pair (a single species, or equal tables): the parameters are
   // then broadcast from here instead of gathered contact by contact into kn ... mud.
   bool uniform = false;
-  double ukn = 0, ugn = 0, ukt = 0, ugt = 0, umus = 0, umud = 0;
+  BatchParams u;
+  BatchForm form;  // the visco-elastic Hertz law's form (BatchLaw::Hertz)
   int row_i[kCap], row_end[kCap];
   int j[kCap], k[kCap];
   // Inputs: geometry and relative motion, radii, spins, parameters, the spring. The squared
@@ -110,6 +204,7 @@ struct ContactBatch {
   alignas(32) double rx[kCap + kW], ry[kCap + kW], rz[kCap + kW];
   alignas(32) double dv0[kCap + kW], dv1[kCap + kW], dv2[kCap + kW];
   alignas(32) double ai[kCap + kW], aj[kCap + kW];
+  alignas(32) double mi[kCap + kW], mj[kCap + kW];  // masses (the Hertz law's only)
   alignas(32) double wi0[kCap + kW], wi1[kCap + kW], wi2[kCap + kW];
   alignas(32) double wj0[kCap + kW], wj1[kCap + kW], wj2[kCap + kW];
   alignas(32) double kn[kCap + kW], gn[kCap + kW], kt[kCap + kW], gt[kCap + kW];
@@ -135,18 +230,19 @@ struct ContactBatch {
       return load(a);
   }
 
-  // Every pair takes (pn, pt) from now on: no per-contact parameters are stored.
-  void set_uniform(const LinearNormal::Params& pn, const CoulombTangential::Params& pt) {
+  // Every pair takes p from now on: no per-contact parameters are stored.
+  void set_uniform(const BatchParams& p) {
     uniform = true;
-    ukn = pn.kn, ugn = pn.gn, ukt = pt.kt, ugt = pt.gt, umus = pt.mu_s, umud = pt.mu_d;
+    u = p;
   }
 
   // Slot c's motion, given its separation (rx, ry, rz) already in place: the touching contact
   // of bi (the owner) with bj in a flow of rate r3, and its stored spring h; the relative
-  // velocity is formed as pair_geometry forms it.
-  template <class Body>
+  // velocity is formed as pair_geometry forms it. `Masses`: the law reads the masses too.
+  template <bool Masses, class Body>
   GRANULAR_ALWAYS_INLINE void set_motion(int c, const Body& bi, const Body& bj, const double r3[3],
                                          const double* h) {
+    if constexpr (Masses) mi[c] = bi.m, mj[c] = bj.m;
     dv0[c] = bi.v[0] - bj.v[0] + r3[0] * rx[c];
     dv1[c] = bi.v[1] - bj.v[1] + r3[1] * ry[c];
     dv2[c] = bi.v[2] - bj.v[2] + r3[2] * rz[c];
@@ -156,10 +252,8 @@ struct ContactBatch {
     h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
   }
   // Slot c's pair parameters (unless uniform).
-  GRANULAR_ALWAYS_INLINE void set_params(int c, const LinearNormal::Params& pn,
-                                         const CoulombTangential::Params& pt) {
-    kn[c] = pn.kn, gn[c] = pn.gn;
-    kt[c] = pt.kt, gt[c] = pt.gt, mus[c] = pt.mu_s, mud[c] = pt.mu_d;
+  GRANULAR_ALWAYS_INLINE void set_params(int c, const BatchParams& p) {
+    kn[c] = p.kn, gn[c] = p.gn, kt[c] = p.kt, gt[c] = p.gt, mus[c] = p.mus, mud[c] = p.mud;
   }
 
   // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
@@ -167,60 +261,65 @@ struct ContactBatch {
   // spring h.
   template <class Body>
   void push(const Body& bi, const Body& bj, int j_, int k_, double rx_, double ry_, double rz_,
-            const double r3[3], const LinearNormal::Params& pn, const CoulombTangential::Params& pt,
-            const double* h) {
+            const double r3[3], const BatchParams& p, const double* h) {
     const int c = n++;
     j[c] = j_, k[c] = k_;
     rx[c] = rx_, ry[c] = ry_, rz[c] = rz_;
-    set_motion(c, bi, bj, r3, h);
-    set_params(c, pn, pt);
+    set_motion<true>(c, bi, bj, r3, h);
+    set_params(c, p);
   }
 
   // Pads the last vector with copies of the last contact (evaluated, never scattered).
   void pad() {
     if (n == 0) return;
-    double* arrays[] = {rx,  ry,  rz, dv0, dv1, dv2, ai,  aj,  wi0, wi1, wi2, wj0,
-                        wj1, wj2, kn, gn,  kt,  gt,  mus, mud, h0,  h1,  h2};
+    double* arrays[] = {rx,  ry,  rz,  dv0, dv1, dv2, ai, aj,  mi,  mj, wi0, wi1, wi2,
+                        wj0, wj1, wj2, kn,  gn,  kt,  gt, mus, mud, h0, h1,  h2};
     for (double* a : arrays)
       for (int c = n; c < (n + kW - 1) / kW * kW; ++c) a[c] = a[n - 1];
   }
 
-  // Linear normal law and the constant Coulomb spring, rotated into the tangent plane, and
-  // the torques. The operations follow pair_geometry, LinearNormal::force,
-  // CoulombTangential::force (rotate_into_plane, coulomb_spring) and ContactModel::evaluate.
-  // Only where cpu_has_avx().
+  // The law L (linear, or the restitution-damped Hertz-Mindlin law), the spring rotated into
+  // the tangent plane, and the torques. The operations follow pair_geometry, the normal law's
+  // force, CoulombTangential::force (rotate_into_plane, coulomb_spring) and
+  // ContactModel::evaluate. Only where cpu_has_avx().
+  template <BatchLaw L>
   void evaluate(double dt) {
     pad();
     if (uniform)
-      evaluate_lanes<true>(dt);
+      evaluate_lanes<L, true>(dt);
     else
-      evaluate_lanes<false>(dt);
+      evaluate_lanes<L, false>(dt);
   }
 
   // One vector of contacts: the law's inputs (the spring s0..s2 in and out) and outputs.
   struct Lanes {
     V X, Y, Z, ai, aj, d0, d1, d2, wi0, wi1, wi2, wj0, wj1, wj2, s0, s1, s2;
+    V mi, mj;                              // masses (read by the Hertz law only)
     V F0, F1, F2, q0, q1, q2, p0, p1, p2;  // force on i, torques on i and j
   };
   struct LaneParams {
     V kn, gn, kt, gt, mus, mud;
   };
+  GRANULAR_AVX_INLINE static LaneParams splat(const BatchParams& p) {
+    return {splat(p.kn), splat(p.gn), splat(p.kt), splat(p.gt), splat(p.mus), splat(p.mud)};
+  }
 
-  template <bool Uniform>
+  template <BatchLaw L, bool Uniform>
   GRANULAR_AVX void evaluate_lanes(double dt) {
     const V vdt = splat(dt);
     for (int c = 0; c < n; c += kW) {
       Lanes l;
       l.X = load(rx + c), l.Y = load(ry + c), l.Z = load(rz + c);
       l.ai = load(ai + c), l.aj = load(aj + c);
+      if constexpr (L == BatchLaw::HertzRestitution) l.mi = load(mi + c), l.mj = load(mj + c);
       l.d0 = load(dv0 + c), l.d1 = load(dv1 + c), l.d2 = load(dv2 + c);
       l.wi0 = load(wi0 + c), l.wi1 = load(wi1 + c), l.wi2 = load(wi2 + c);
       l.wj0 = load(wj0 + c), l.wj1 = load(wj1 + c), l.wj2 = load(wj2 + c);
       l.s0 = load(h0 + c), l.s1 = load(h1 + c), l.s2 = load(h2 + c);
-      const LaneParams p{par<Uniform>(kn + c, ukn),   par<Uniform>(gn + c, ugn),
-                         par<Uniform>(kt + c, ukt),   par<Uniform>(gt + c, ugt),
-                         par<Uniform>(mus + c, umus), par<Uniform>(mud + c, umud)};
-      law(l, p, vdt);
+      const LaneParams p{par<Uniform>(kn + c, u.kn),   par<Uniform>(gn + c, u.gn),
+                         par<Uniform>(kt + c, u.kt),   par<Uniform>(gt + c, u.gt),
+                         par<Uniform>(mus + c, u.mus), par<Uniform>(mud + c, u.mud)};
+      law<L>(l, p, vdt, form);
       store(h0 + c, l.s0), store(h1 + c, l.s1), store(h2 + c, l.s2);
       store(q0 + c, l.q0), store(q1 + c, l.q1), store(q2 + c, l.q2);
       store(p0 + c, l.p0), store(p1 + c, l.p1), store(p2 + c, l.p2);
@@ -228,27 +327,50 @@ struct ContactBatch {
     }
   }
 
-  // The law on one vector of contacts (also the near stream's, kernels/cpu/near_stream.hpp):
+  // The law L on one vector of contacts (also the near stream's, kernels/cpu/near_stream.hpp):
   // the parts of kernels/contact/lane_law.inc, composed as ContactModel::evaluate composes them
-  // for one contact (pair_geometry, LinearNormal::force, CoulombTangential::force with the
-  // constant spring, the torques). The rare branches are taken only where a lane in `active`
+  // for one contact (pair_geometry, the normal law's force, CoulombTangential::force with the
+  // law's spring, the torques). The rare branches are taken only where a lane in `active`
   // needs them: the other lanes (apart pairs of the stream) are not used, and must not send a
   // vector down a branch.
-  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt,
+  template <BatchLaw L>
+  GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt, const BatchForm& form,
                                       M active = M{-1, -1, -1, -1}) {
+    constexpr bool restitution = L == BatchLaw::HertzRestitution;
     const V r[3] = {l.X, l.Y, l.Z};
     const V dv[3] = {l.d0, l.d1, l.d2};
     V n[3], delta, vn;
     contact_frame(r, l.X * l.X + l.Y * l.Y + l.Z * l.Z, l.ai, l.aj, dv, n, delta, vn);
-    const V fn = linear_normal_force(p.kn, p.gn, delta, -vn);
+    V fn, scale{}, mstar{};  // scale: the Mindlin spring's sqrt(L delta)
+    if constexpr (restitution) {
+      mstar = reduced_pair(l.mi, l.mj);
+      fn = hertz_restitution_force(p.kn, p.gn, reduced_pair(l.ai, l.aj), mstar, delta, -vn, scale);
+    } else if constexpr (L == BatchLaw::Hertz) {
+      // The lengths as reduced_radius and pair_diameter form them (no wall here).
+      const V reduced = reduced_pair(l.ai, l.aj), diameter = l.ai + l.aj;
+      fn = hertz_force(p.kn, p.gn, form.reduced_radius ? reduced : diameter, delta, -vn);
+      if (form.tangential != CoulombTangential::Constant)
+        scale = lane_sqrt(
+            (form.tangential == CoulombTangential::MindlinPairDiameter ? diameter : reduced) *
+            delta);
+    } else {
+      fn = linear_normal_force(p.kn, p.gn, delta, -vn);
+    }
     const V wi[3] = {l.wi0, l.wi1, l.wi2}, wj[3] = {l.wj0, l.wj1, l.wj2};
     V li, lj, vt[3];
     contact_slip(dv, n, vn, delta, l.ai, l.aj, wi, wj, li, lj, vt);
     V s[3] = {l.s0, l.s1, l.s2};
     rotate_into_plane_lanes(s, n, active);
     for (int d = 0; d < 3; ++d) s[d] += vt[d] * vdt;
+    V k = p.kt, g = p.gt;  // the constant spring's (CoulombTangential::scale: 1)
+    if constexpr (restitution) {
+      mindlin_restitution_spring(p.kt, p.gt, scale, mstar, k, g);
+    } else if constexpr (L == BatchLaw::Hertz) {
+      if (form.tangential != CoulombTangential::Constant) k = p.kt * scale, g = p.gt * scale;
+    }
     V t[3];
-    coulomb_spring_lanes(s, vt, p.kt, p.gt, p.mus, p.mud, fn, t, true, active);
+    // The restitution-damped spring keeps no dashpot share after a slip (coulomb_spring).
+    coulomb_spring_lanes(s, vt, k, g, p.mus, p.mud, fn, t, !restitution, active);
     l.s0 = s[0], l.s1 = s[1], l.s2 = s[2];
     l.F0 = fn * n[0] + t[0], l.F1 = fn * n[1] + t[1], l.F2 = fn * n[2] + t[2];
     V q[3], qj[3];

@@ -1,6 +1,7 @@
 // The near list as one flat stream of contacts per slab, for the host one-pass force kernel
-// with the batched frictional law and with the frictionless linear law
-// (kernels/dem/contact_forces.hpp, kernels/cpu/contact_batch.hpp).
+// with the batched frictional laws (linear, and the Hertz-Mindlin laws) and
+// with the frictionless linear law (kernels/dem/contact_forces.hpp,
+// kernels/cpu/contact_batch.hpp).
 //
 // The batched rows split each owner row into its touching entries, copy the touching pairs'
 // positions, velocities, spins and springs into the batch's slots, evaluate them four at a
@@ -252,13 +253,12 @@ GRANULAR_AVX2_INLINE M touching_lanes(const LaneBox& lb, const double* x, const 
 }  // namespace near_stream_detail
 
 // The stream entries e0 .. e1 - 1 (one slab) and the slab's rows without near entries
-// (empty[z0 .. z1 - 1]) with every pair's parameters (pn, pt): the forces, torques and
-// springs of the batched rows, bitwise. `Packed`: the particles' inputs come from `pack`
-// (ParticlePack, the values of the arrays of hv).
-template <bool Packed>
+// (empty[z0 .. z1 - 1]) with the batched law L, its form and every pair's parameters pp: the
+// forces, torques and springs of the batched rows, bitwise. `Packed`: the particles' inputs come
+// from `pack` (ParticlePack, the values of the arrays of hv).
+template <BatchLaw L, bool Packed>
 GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicBox& b,
-                                    const LinearNormal::Params& pn,
-                                    const CoulombTangential::Params& pt, const int* si,
+                                    const BatchParams& pp, const BatchForm& form, const int* si,
                                     const int* sj, const int* sr, int e0, int e1, const int* empty,
                                     int z0, int z1, double* hist, const HostVec3& fh,
                                     const HostVec3& qh, const double rate[3], double dt,
@@ -277,11 +277,12 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
   const double* const v = &hv.v(0, 0);
   const double* const w = &hv.w(0, 0);
   const double* const rad = &hv.radius(0);
+  const double* const mass = &hv.mass(0);
+  constexpr bool masses = L == BatchLaw::HertzRestitution;
   const LaneBox lb = lane_box(b);
   const V r30 = CB::splat(rate[0]), r31 = CB::splat(rate[1]), r32 = CB::splat(rate[2]);
   const V vdt = CB::splat(dt);
-  const CB::LaneParams par{CB::splat(pn.kn), CB::splat(pn.gn),   CB::splat(pt.kt),
-                           CB::splat(pt.gt), CB::splat(pt.mu_s), CB::splat(pt.mu_d)};
+  const CB::LaneParams par = CB::splat(pp);
   // The owner whose row is being summed, and its sums: (x, y) pairs and z.
   int cur = -1;
   __m128d fxy = _mm_setzero_pd(), qxy = _mm_setzero_pd();
@@ -305,6 +306,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
           __builtin_prefetch(x + 3 * ja);
           __builtin_prefetch(v + 3 * ja);
           __builtin_prefetch(w + 3 * ja);
+          if (masses) __builtin_prefetch(mass + ja);
         }
         __builtin_prefetch(f + 3 * ja, 1);
         __builtin_prefetch(q + 3 * ja, 1);
@@ -317,12 +319,12 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
     const int touching = CB::lanes(touch);
     if (touching) {
       V vi0, vi1, vi2, vj0, vj1, vj2;
-      if constexpr (Packed) {
-        V pad;
-        load_packed(pack, ParticlePack::kVelocity, ii, vi0, vi1, vi2, pad);
-        load_packed(pack, ParticlePack::kVelocity, jj, vj0, vj1, vj2, pad);
+      if constexpr (Packed) {  // the velocity's quarter ends with the mass
+        load_packed(pack, ParticlePack::kVelocity, ii, vi0, vi1, vi2, c.mi);
+        load_packed(pack, ParticlePack::kVelocity, jj, vj0, vj1, vj2, c.mj);
       } else {
         load3(v, ii, vi0, vi1, vi2), load3(v, jj, vj0, vj1, vj2);
+        if constexpr (masses) c.mi = load1(mass, ii), c.mj = load1(mass, jj);
       }
       c.d0 = vi0 - vj0 + r30 * c.X;  // as set_motion
       c.d1 = vi1 - vj1 + r31 * c.Y;
@@ -335,7 +337,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
         load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
       }
       load3(hist, sr + e, c.s0, c.s1, c.s2);
-      CB::law(c, par, vdt, touch);
+      CB::law<L>(c, par, vdt, form, touch);
       // Unpacked into (x, y) pairs, so that the scatter below moves each lane's vectors as
       // one 16-byte pair and a z: a third fewer loads, stores and additions than component
       // by component (1.00-1.06x within one run), each component's operation unchanged.

@@ -70,7 +70,7 @@ KOKKOS_FORCEINLINE_FUNCTION void pair_geometry(const Body& bi, const Body& bj, d
   double vn;
   contact_frame(r, r2, s.ai, s.aj, dv, s.n, s.delta, vn);
   s.si = bi.s, s.sj = bj.s;
-  s.mstar = bi.m * bj.m / (bi.m + bj.m);
+  s.mstar = reduced_pair(bi.m, bj.m);
   s.wall = false;
   s.delta_dot = -vn;
   if (rotations) {
@@ -526,11 +526,13 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
   static_assert(H == 3 && rot, "the batched law has a tangential spring");
   static_assert(ContactBatch::kCap <= SplitOut::kMax, "a batch-sized row must fit one split");
   const double r3[3] = {rate[0], rate[1], rate[2]};  // a local copy: no reloads after stores
+  using Law = ContactBatchLaw<Model>;
+  constexpr BatchLaw L = Law::law;
   ContactBatch cb;
-  if (ContactBatchLaw<Model>::uniform(m))
-    cb.set_uniform(m.normal.table(0, 0), m.tangential.table(0, 0));
+  if (Law::uniform(m)) cb.set_uniform(Law::pair(m, 0, 0));
+  cb.form = Law::form(m);
   auto flush = [&] {
-    cb.evaluate(dt);
+    cb.evaluate<L>(dt);
     int c = 0;
     for (int row = 0; row < cb.rows; ++row) {
       const int i = cb.row_i[row];
@@ -584,8 +586,8 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
       const int r = row0 + cb.k[c];  // history row
       cb.k[c] = r;
       const Body bj = load_body(hv, cb.j[c], rot);
-      cb.set_motion(c, bi, bj, r3, hist + r * H);
-      if (!cb.uniform) cb.set_params(c, m.normal.table(bi.s, bj.s), m.tangential.table(bi.s, bj.s));
+      cb.set_motion<L == BatchLaw::HertzRestitution>(c, bi, bj, r3, hist + r * H);
+      if (!cb.uniform) cb.set_params(c, Law::pair(m, bi.s, bj.s));
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
   }
@@ -634,8 +636,9 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
       if (Mode == NearMode::Use && stream && st->ready) {
         const int *si = st->i.data(), *sj = st->j.data(), *sr = st->r.data();
         const int *sb = st->begin.data(), *se = st->empty.data(), *eb = st->empty_begin.data();
-        const LinearNormal::Params pn = m.normal.table(0, 0);
-        const CoulombTangential::Params pt = m.tangential.table(0, 0);
+        constexpr BatchLaw L = ContactBatchLaw<Model>::law;
+        const BatchParams pp = ContactBatchLaw<Model>::pair(m, 0, 0);
+        const BatchForm form = ContactBatchLaw<Model>::form(m);
         const double* const pack = nr.pack;
         ++st->reads;
         st->packed_reads += pack != nullptr;
@@ -645,11 +648,11 @@ void one_pass_slabs(const HostParticleViews& hv, const PeriodicBox& b, const Mod
               "dem::compute_forces::near_stream", Policy(0, tasks), [=](const int t) {
                 const int s = t * rounds + r;
                 if (pack != nullptr)
-                  near_stream_slab<true>(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se, eb[s],
-                                         eb[s + 1], hist, fh, qh, rt, dt, pack);
+                  near_stream_slab<L, true>(hv, b, pp, form, si, sj, sr, sb[s], sb[s + 1], se,
+                                            eb[s], eb[s + 1], hist, fh, qh, rt, dt, pack);
                 else
-                  near_stream_slab<false>(hv, b, pn, pt, si, sj, sr, sb[s], sb[s + 1], se, eb[s],
-                                          eb[s + 1], hist, fh, qh, rt, dt, nullptr);
+                  near_stream_slab<L, false>(hv, b, pp, form, si, sj, sr, sb[s], sb[s + 1], se,
+                                             eb[s], eb[s + 1], hist, fh, qh, rt, dt, nullptr);
               });
         }
         return;

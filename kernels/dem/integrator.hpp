@@ -34,8 +34,8 @@ struct DampingStart {
 // operations in the same order as the loop of kick_drift below, so the same bits; returns
 // the block's largest squared displacement (NaNs skipped, as there).
 // `pack`: where not null, the pass also writes each particle's packed record (ParticlePack in
-// kernels/cpu/particle_pack.hpp: x, y, z, radius | vx, vy, vz, 0 | wx, wy, wz, 0) with the values
-// it has just stored, for the frictional stream of the force pass that follows.
+// kernels/cpu/particle_pack.hpp: x, y, z, radius | vx, vy, vz, mass | wx, wy, wz, 0) with the
+// values it has just stored, for the frictional stream of the force pass that follows.
 struct KickDriftRows {
   double *x, *v, *f, *w, *q;
   const double *mass, *inertia, *x_ref;
@@ -118,7 +118,7 @@ struct KickDriftRows {
     double* const r = pack + static_cast<long>(ParticlePack::kStride) * i;
     for (int d = 0; d < 3; ++d)
       r[d] = x[3 * i + d], r[4 + d] = v[3 * i + d], r[8 + d] = w[3 * i + d];
-    r[3] = radius[i], r[7] = 0.0, r[11] = 0.0;
+    r[3] = radius[i], r[7] = mass[i], r[11] = 0.0;
   }
 
 #if GRANULAR_HOST_AVX
@@ -221,7 +221,7 @@ struct KickDriftRows {
       if (pk != nullptr) {
         double* const r = pk + static_cast<long>(ParticlePack::kStride) * i;
         store_quarters(r + ParticlePack::kPosRadius, xs, simd4::load(radius + i));
-        store_quarters(r + ParticlePack::kVelocity, vs, zero);
+        store_quarters(r + ParticlePack::kVelocity, vs, simd4::load(mass + i));
         store_quarters(r + ParticlePack::kSpin, ws, zero);
       }
       // run()'s sums per particle, (0 + a_x) + a_y + a_z, in lanes: 0 + a is a for every

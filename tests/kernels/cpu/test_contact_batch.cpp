@@ -5,13 +5,15 @@
 // contact rows of the host one-pass kernel: bitwise the same positions, velocities, spins,
 // forces, torques and springs after a compression and a shear with rebuilds and two species
 // of different stiffness and friction, and for a packing whose crowded particle owns more
-// contacts than a batch holds (its row goes scalar). Skipped where the processor has no AVX.
+// contacts than a batch holds (its row goes scalar); the same for the restitution-damped
+// Hertz-Mindlin law. Skipped where the processor has no AVX.
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "kernels/contact/contact_model.hpp"
@@ -41,6 +43,43 @@ Friction two_species_friction() {
   t.table.p[0][1] = t.table.p[1][0] = {1.2e5, 250, 0.3, 0.25, CoulombTangential::Constant};
   return {two_species_normal(), t, {}};
 }
+
+using HertzFriction = ContactModel<HertzRestitutionNormal, CoulombTangential>;
+
+// The restitution-damped Hertz-Mindlin law of the studies with two species, about as stiff as
+// the linear set at these overlaps (sqrt(R* delta) ~ 0.05).
+HertzFriction two_species_hertz() {
+  constexpr int law = CoulombTangential::MindlinRestitution;
+  HertzRestitutionNormal n = HertzRestitutionNormal::uniform(2e6, 0.3);
+  n.table.p[1][1] = {3e6, 0.5};
+  n.table.p[0][1] = n.table.p[1][0] = {2.5e6, 0.4};
+  CoulombTangential t = CoulombTangential::uniform(1.6e6, 0.4, 0.5, 0.4, law);
+  t.table.p[1][1] = {2.4e6, 0.6, 0.2, 0.2, law};
+  t.table.p[0][1] = t.table.p[1][0] = {2e6, 0.5, 0.3, 0.25, law};
+  return {n, t, {}};
+}
+
+using HertzMindlin = ContactModel<HertzNormal, CoulombTangential>;
+
+// The visco-elastic Hertz law with two species in one form: the normal length R* (`reduced`,
+// the mixtures' modulus form) or a_i + a_j (the stiffness form of the Hertz moduli), and the
+// spring's law (constant, or Mindlin's over either length). The coefficients make it about as
+// stiff as the linear set at these overlaps.
+HertzMindlin two_species_hertz_mindlin(bool reduced, int law) {
+  const double c = reduced ? 0.05 : 0.15;  // sqrt(L delta) at these overlaps
+  const double t = law == CoulombTangential::Constant ? 1.0 : c;
+  HertzNormal n{PairTable<HertzNormal::Params>::uniform({1e5 / c, 1000 / c, reduced})};
+  n.table.p[1][1] = {1.5e5 / c, 1500 / c, reduced};
+  n.table.p[0][1] = n.table.p[1][0] = {1.2e5 / c, 1200 / c, reduced};
+  CoulombTangential s = CoulombTangential::uniform(8e4 / t, 200 / t, 0.5, 0.4, law);
+  s.table.p[1][1] = {1.2e5 / t, 300 / t, 0.2, 0.2, law};
+  s.table.p[0][1] = s.table.p[1][0] = {1e5 / t, 250 / t, 0.3, 0.25, law};
+  return {n, s, {}};
+}
+// The three forms the studies use.
+const int kMindlinForms[3][2] = {{1, CoulombTangential::Constant},
+                                 {0, CoulombTangential::MindlinPairDiameter},
+                                 {1, CoulombTangential::MindlinReducedRadius}};
 
 #if GRANULAR_CONTACT_BATCH
 HostParticles two_species_gas(PeriodicBox& box, int count) {
@@ -120,6 +159,39 @@ TYPED_TEST(ContactBatchTest, BatchedFrictionalContactsGiveBitwiseTheContactByCon
   }
 }
 
+// The restitution-damped Hertz-Mindlin law in batches: parameters gathered for two species,
+// then broadcast for one.
+TYPED_TEST(ContactBatchTest, BatchedHertzContactsGiveBitwiseTheContactByContactTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<HertzFriction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    compare_compression<Exec>(two_species_hertz());
+    HertzFriction one = two_species_hertz();
+    one.normal = HertzRestitutionNormal::uniform(2e6, 0.3);
+    one.tangential =
+        CoulombTangential::uniform(1.6e6, 0.4, 0.5, 0.4, CoulombTangential::MindlinRestitution);
+    ASSERT_TRUE(ContactBatchLaw<HertzFriction>::uniform(one));
+    compare_compression<Exec>(one);
+  }
+}
+
+// The visco-elastic Hertz law in its three forms (the mixtures', the Hertz moduli's and the
+// reduced-radius Mindlin spring), parameters gathered for two species.
+TYPED_TEST(ContactBatchTest, BatchedViscoElasticHertzContactsGiveBitwiseTheScalarTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<HertzMindlin>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    for (const auto& f : kMindlinForms) {
+      SCOPED_TRACE("reduced radius " + std::to_string(f[0]) + ", law " + std::to_string(f[1]));
+      compare_compression<Exec>(two_species_hertz_mindlin(f[0] != 0, f[1]));
+    }
+  }
+}
+
 // One parameter set for every pair: the batch broadcasts it instead of gathering it.
 TYPED_TEST(ContactBatchTest, BroadcastParametersOfOneSpeciesGiveBitwiseTheScalarTrajectory) {
   using Exec = TypeParam;
@@ -193,12 +265,14 @@ TYPED_TEST(ContactBatchTest, CrowdedRowBeyondTheBatchCapacityKeepsBitwiseTheSame
   }
 }
 
-TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
-  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
-  const Friction model = two_species_friction();
-  const double inf = std::numeric_limits<double>::infinity();
+// Each lane of the batched law L against the scalar law, on 37 contacts that take every
+// branch. `tweak(c, one, a, b)` changes pair (a, b)'s parameters of the scalar model `one`
+// for contact c (the batch takes the same parameters).
+template <class Model, class Tweak>
+void expect_lanes_equal_scalar_law(const Model& model, Tweak tweak) {
   const double dt = 0.003;
   ContactBatch cb;
+  cb.form = ContactBatchLaw<Model>::form(model);
   std::vector<std::array<double, 12>> expected;
   int slid = 0;
   for (int c = 0; c < 37; ++c) {  // not a multiple of the lane count: the padding is used
@@ -206,7 +280,7 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     Body bi{}, bj{};
     bi.a = 0.5 + 0.01 * c, bj.a = 0.7 - 0.005 * c;
     bi.s = c % 2, bj.s = (c / 2) % 2;
-    bi.m = 1.0, bj.m = 2.0;
+    bi.m = 1.0 + 0.03 * c, bj.m = 2.0 - 0.02 * c;
     // Centre distance just under contact: overlaps of 1-5 % of the radii.
     const double e[3] = {std::cos(u), std::sin(u), 0.5 * std::sin(2 * u)};
     const double len = (bi.a + bj.a) * (0.97 + 0.02 * std::sin(3 * u)) /
@@ -226,17 +300,11 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     if (c % 5 == 1) h = {0.3 * std::sin(u), -0.2, 0.1};
     if (c % 7 == 3) h = {s.n[0] * 1e-3 + 1e-4, s.n[1] * 1e-3, s.n[2] * 1e-3};
     if (c == 4) h = {0, 0, 0};
-    CoulombTangential::Params pt = model.tangential.table(bi.s, bj.s);
-    if (c == 6) pt.kt = 0.0;              // no tangential stiffness
-    if (c == 8) pt.mu_s = pt.mu_d = inf;  // never slides
-    LinearNormal::Params pn = model.normal.table(bi.s, bj.s);
-    if (c == 8 || c == 9) pn.kn = 0.0, pn.gn = 0.0;  // zero normal force
-    if (c == 10) pn.kn = -1e3;                       // a tensile normal force
-    cb.push(bi, bj, c, c, rx, ry, rz, rate, pn, pt, h.data());
-    // The scalar law with the same per-pair parameters.
-    Friction one = model;
-    one.normal.table.p[bi.s][bj.s] = pn;
-    one.tangential.table.p[bi.s][bj.s] = pt;
+    // The scalar law with this contact's parameters, and the batch with the same.
+    Model one = model;
+    tweak(c, one, bi.s, bj.s);
+    cb.push(bi, bj, c, c, rx, ry, rz, rate, ContactBatchLaw<Model>::pair(one, bi.s, bj.s),
+            h.data());
     std::array<double, 3> probe = h;
     double ft[3];
     slid += one.tangential.force(s, one.normal.force(s, nullptr), dt, probe.data(), ft);
@@ -245,7 +313,7 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     expected.push_back({out.f[0], out.f[1], out.f[2], out.q[0], out.q[1], out.q[2], out.qj[0],
                         out.qj[1], out.qj[2], h[0], h[1], h[2]});
   }
-  cb.evaluate(dt);
+  cb.evaluate<ContactBatchLaw<Model>::law>(dt);
   ASSERT_GE(slid, 5) << "too few sliding lanes";
   ASSERT_LE(slid, cb.n - 10) << "too few sticking lanes";
   for (int c = 0; c < cb.n; ++c) {
@@ -256,14 +324,82 @@ TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
           << "contact " << c << " value " << e << ": " << got[e] << " vs " << expected[c][e];
   }
 }
+
+TEST(ContactBatchLawTest, EveryLaneEqualsTheScalarLawBitwiseOnEachBranch) {
+  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+  const double inf = std::numeric_limits<double>::infinity();
+  expect_lanes_equal_scalar_law(two_species_friction(), [&](int c, Friction& m, int a, int b) {
+    CoulombTangential::Params& pt = m.tangential.table.p[a][b];
+    LinearNormal::Params& pn = m.normal.table.p[a][b];
+    if (c == 6) pt.kt = 0.0;                         // no tangential stiffness
+    if (c == 8) pt.mu_s = pt.mu_d = inf;             // never slides
+    if (c == 8 || c == 9) pn.kn = 0.0, pn.gn = 0.0;  // zero normal force
+    if (c == 10) pn.kn = -1e3;                       // a tensile normal force
+  });
+}
+
+// The restitution-damped Hertz-Mindlin law: reduced radius and mass per lane, the dashpots'
+// square roots, and the spring that keeps no dashpot share after a slip.
+TEST(ContactBatchLawTest, EveryHertzLaneEqualsTheScalarLawBitwiseOnEachBranch) {
+  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+  const double inf = std::numeric_limits<double>::infinity();
+  expect_lanes_equal_scalar_law(two_species_hertz(), [&](int c, HertzFriction& m, int a, int b) {
+    CoulombTangential::Params& pt = m.tangential.table.p[a][b];
+    HertzRestitutionNormal::Params& pn = m.normal.table.p[a][b];
+    if (c == 6) pt.kt = 0.0;                   // no tangential stiffness
+    if (c == 8) pt.mu_s = pt.mu_d = inf;       // never slides
+    if (c == 8 || c == 9) pn.K = 0.0;          // zero normal force
+    if (c == 10 || c == 12) pn.alpha = 40.0;   // the dashpot outweighs the spring
+    if (c == 11) pt.gt = 0.0, pn.alpha = 0.0;  // no damping
+  });
+}
+
+// The visco-elastic Hertz law in each form: the normal length, the spring's scale (none for
+// the constant spring), the dashpots proportional to sqrt(L delta).
+TEST(ContactBatchLawTest, EveryViscoElasticHertzLaneEqualsTheScalarLawBitwiseOnEachBranch) {
+  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const auto& f : kMindlinForms) {
+    SCOPED_TRACE("reduced radius " + std::to_string(f[0]) + ", law " + std::to_string(f[1]));
+    const HertzMindlin model = two_species_hertz_mindlin(f[0] != 0, f[1]);
+    ASSERT_TRUE(ContactBatchLaw<HertzMindlin>::usable(model));
+    expect_lanes_equal_scalar_law(model, [&](int c, HertzMindlin& m, int a, int b) {
+      CoulombTangential::Params& pt = m.tangential.table.p[a][b];
+      HertzNormal::Params& pn = m.normal.table.p[a][b];
+      if (c == 6) pt.kt = 0.0;                       // no tangential stiffness
+      if (c == 8) pt.mu_s = pt.mu_d = inf;           // never slides
+      if (c == 8 || c == 9) pn.K = 0.0, pn.G = 0.0;  // zero normal force
+      if (c == 10) pn.K = -1e3;                      // a tensile normal force
+    });
+  }
+}
 #endif
 
-TEST(ContactBatchLawTest, MindlinSpringsAreLeftToTheContactByContactRows) {
+TEST(ContactBatchLawTest, EachBatchedLawTakesOnlyItsOwnFormsOfTheSpring) {
   Friction m = two_species_friction();
   EXPECT_TRUE(ContactBatchLaw<Friction>::usable(m));
   m.tangential.table.p[0][1].law = CoulombTangential::MindlinPairDiameter;
   EXPECT_FALSE(ContactBatchLaw<Friction>::usable(m));
-  EXPECT_FALSE((ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>>::available));
+  // The visco-elastic Hertz law: one form for every pair.
+  HertzMindlin v = two_species_hertz_mindlin(false, CoulombTangential::MindlinPairDiameter);
+  EXPECT_TRUE(ContactBatchLaw<HertzMindlin>::usable(v));
+  v.tangential.table.p[0][1].law = CoulombTangential::MindlinReducedRadius;
+  EXPECT_FALSE(ContactBatchLaw<HertzMindlin>::usable(v)) << "two spring forms";
+  v = two_species_hertz_mindlin(false, CoulombTangential::MindlinPairDiameter);
+  v.normal.table.p[1][1].reduced_radius = true;
+  EXPECT_FALSE(ContactBatchLaw<HertzMindlin>::usable(v)) << "two normal lengths";
+  v = two_species_hertz_mindlin(true, CoulombTangential::MindlinRestitution);
+  EXPECT_FALSE(ContactBatchLaw<HertzMindlin>::usable(v)) << "that spring is HertzRestitution's";
+  // The Hertz law is batched with its own spring, the restitution-damped Mindlin one.
+  HertzFriction h = two_species_hertz();
+  EXPECT_TRUE(ContactBatchLaw<HertzFriction>::usable(h));
+  EXPECT_FALSE(ContactBatchLaw<HertzFriction>::uniform(h));
+  h.tangential.table.p[1][0].law = CoulombTangential::MindlinReducedRadius;
+  EXPECT_FALSE(ContactBatchLaw<HertzFriction>::usable(h));
+  h = two_species_hertz();
+  h.coulomb_elastic_normal = true;
+  EXPECT_FALSE(ContactBatchLaw<HertzFriction>::usable(h))
+      << "the batch limits with the total force";
   EXPECT_FALSE((ContactBatchLaw<ContactModel<LinearNormal>>::available))
       << "the frictionless law measured slower batched";
 }

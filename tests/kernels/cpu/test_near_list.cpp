@@ -6,9 +6,9 @@
 // near skin; and a run cut into calls too short for the near list (which then reads whole
 // rows) ends on the same bits. The near list's stream (kernels/cpu/near_stream.hpp) gives the
 // bits of the near rows, batched frictional and frictionless contact by contact, signed
-// zeros of rows without near entries included, and leaves laws with several parameter sets
-// to the rows; the frictional stream gives the same bits from the particles' packed records
-// as from their arrays.
+// zeros of rows without near entries included, for the linear and the restitution-damped
+// Hertz-Mindlin laws, and leaves laws with several parameter sets to the rows; the frictional
+// streams give the same bits from the particles' packed records as from their arrays.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,10 +29,26 @@ namespace {
 using Frictionless = ContactModel<LinearNormal, NoTangential>;
 using Frictional = ContactModel<LinearNormal, CoulombTangential>;
 using Rolling = ContactModel<LinearNormal, CoulombTangential, RollingTorsion>;
+using HertzFrictional = ContactModel<HertzRestitutionNormal, CoulombTangential>;
+using HertzMindlin = ContactModel<HertzNormal, CoulombTangential>;
 
 Frictionless make_model(Frictionless*) { return {LinearNormal::uniform(1e5, 1000), {}, {}}; }
 Frictional make_model(Frictional*) {
   return {LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.5), {}};
+}
+// The studies' restitution-damped Hertz-Mindlin law, about as stiff as the linear one at these
+// overlaps (sqrt(R* delta) ~ 0.05).
+HertzFrictional make_model(HertzFrictional*) {
+  return {HertzRestitutionNormal::uniform(2e6, 0.3),
+          CoulombTangential::uniform(1.6e6, 0.4, 0.5, 0.5, CoulombTangential::MindlinRestitution),
+          {}};
+}
+// The visco-elastic Hertz law in the Hertz moduli's stiffness form (length a_i + a_j, the
+// Mindlin spring over the same length), sqrt(L delta) ~ 0.1 here.
+HertzMindlin make_model(HertzMindlin*) {
+  return {HertzNormal{PairTable<HertzNormal::Params>::uniform({1e6, 1e4, false})},
+          CoulombTangential::uniform(8e5, 2e3, 0.5, 0.5, CoulombTangential::MindlinPairDiameter),
+          {}};
 }
 Rolling make_model(Rolling*) {
   return {LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.5),
@@ -185,14 +201,14 @@ void several_parameter_sets_read_rows(const Model& two) {
 // here for any number of particles) against the stream reading the arrays: the same reads,
 // the same bits, through rebuilds. With the default threshold a system this small reads the
 // arrays.
-template <class Exec>
+template <class Exec, class Model>
 void compare_packed_with_arrays() {
   DemParams prm = stirred_params(), arrays = stirred_params(), small = stirred_params();
   prm.packed_stream_min_particles = 0;
   arrays.packed_stream = false;
-  auto a = stirred_packing<Exec, Frictional>(prm);
-  auto b = stirred_packing<Exec, Frictional>(arrays);
-  auto c = stirred_packing<Exec, Frictional>(small);
+  auto a = stirred_packing<Exec, Model>(prm);
+  auto b = stirred_packing<Exec, Model>(arrays);
+  auto c = stirred_packing<Exec, Model>(small);
   ASSERT_LT(c.particles().n, small.packed_stream_min_particles);
   c.step(50);
   if (cpu_has_avx2()) {
@@ -242,7 +258,28 @@ TYPED_TEST(NearListTest, FrictionalStreamOfTheNearListGivesTheBitsOfItsRows) {
 
 TYPED_TEST(NearListTest, FrictionalStreamFromPackedParticleRecordsGivesTheBitsOfTheArrays) {
   if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
-  compare_packed_with_arrays<TypeParam>();
+  compare_packed_with_arrays<TypeParam, Frictional>();
+}
+
+// The Hertz law reads the masses too: from the velocity's quarter of the packed records.
+TYPED_TEST(NearListTest, HertzStreamFromPackedParticleRecordsGivesTheBitsOfTheArrays) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_packed_with_arrays<TypeParam, HertzFrictional>();
+}
+
+TYPED_TEST(NearListTest, HertzBatchedAndScalarRowsFromTheNearListGiveTheSameBits) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_with_whole_rows<TypeParam, HertzFrictional>(true);
+  compare_with_whole_rows<TypeParam, HertzFrictional>(false);
+  compare_with_whole_rows<TypeParam, HertzMindlin>(true);
+}
+
+TYPED_TEST(NearListTest, HertzStreamOfTheNearListGivesTheBitsOfItsRows) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_stream_with_rows<TypeParam, HertzFrictional>(0.025);
+  compare_stream_with_rows<TypeParam, HertzFrictional>(-1.0);
+  compare_stream_with_rows<TypeParam, HertzMindlin>(0.025);
+  compare_stream_with_rows<TypeParam, HertzMindlin>(-1.0);
 }
 
 TYPED_TEST(NearListTest, FrictionlessStreamOfTheNearListGivesTheBitsOfItsRows) {
@@ -260,6 +297,9 @@ TYPED_TEST(NearListTest, LawsWithSeveralParameterSetsReadTheNearRowsInsteadOfThe
   normal_two.normal.table.p[0][1].gn = 900;
   normal_two.normal.table.p[1][0].gn = 900;
   several_parameter_sets_read_rows<TypeParam>(normal_two);
+  HertzFrictional hertz_two = make_model((HertzFrictional*)nullptr);
+  hertz_two.normal.table.p[1][1].alpha = 0.5;
+  several_parameter_sets_read_rows<TypeParam>(hertz_two);
 }
 
 // A particle at rest with no partner: the integrator starts its force at -gamma_b * 0 = -0,
@@ -310,4 +350,5 @@ TYPED_TEST(NearListTest, ARowWithoutNearEntriesAddsItsZeroSumInTheStreamAsInTheR
   if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
   empty_row_adds_zero_sum<TypeParam, Frictional>();
   empty_row_adds_zero_sum<TypeParam, Frictionless>();
+  empty_row_adds_zero_sum<TypeParam, HertzFrictional>();
 }

@@ -96,8 +96,8 @@ void compare(int n, bool pending, bool damp) {
 }
 
 // The pass writing the packed records (KickDriftRows::pack), four at a time or one by one:
-// each record holds the bits the pass stored in the arrays (position, radius, velocity, spin,
-// zero pads), and the arrays are those of the pass without records.
+// each record holds the bits the pass stored in the arrays (position, radius, velocity, mass,
+// spin, a zero pad), and the arrays are those of the pass without records.
 template <bool Rotations>
 void compare_records(int n, bool avx2) {
 #if GRANULAR_HOST_AVX
@@ -126,7 +126,7 @@ void compare_records(int n, bool avx2) {
     for (int d = 0; d < 4; ++d) {
       double* const r = expect.data() + S * i;
       r[d] = d < 3 ? b.x[3 * i + d] : radius[i];
-      r[4 + d] = d < 3 ? b.v[3 * i + d] : 0.0;
+      r[4 + d] = d < 3 ? b.v[3 * i + d] : b.mass[i];
       r[8 + d] = d < 3 ? b.w[3 * i + d] : 0.0;
     }
   EXPECT_TRUE(bitwise_equal(expect, got)) << what;
