@@ -2,8 +2,8 @@
 // decompression) of a small polydisperse gas gives bitwise identical trajectories and
 // measurements whatever the number of threads, for every family of contact laws that keeps
 // per-contact history: frictionless, frictional (tangential spring), frictional with rolling
-// and torsion springs, hysteretic (delta_max) with friction, and Hertz-Mindlin. This holds by
-// construction: every particle sums its own forces in neighbour-list order, each contact's
+// and torsion springs, hysteretic (delta_max) with friction, and both Hertz-Mindlin laws. This
+// holds by construction: every particle sums its own forces in neighbour-list order, each contact's
 // history is advanced by its owner only, cells are sorted, and diagnostics are summed in
 // fixed blocks.
 // The reference run uses one thread: on the Serial backend when it is enabled, and on the
@@ -252,6 +252,19 @@ TEST(ThreadDeterminism, FrictionalPackingOverManySlabsIsThreadCountIndependent) 
   int slabs = 0;
   expect_thread_count_independent(
       Model{LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.4), {}},
+      3000, 1500, &slabs);
+  EXPECT_GE(slabs, 6);
+}
+
+// The restitution-damped Hertz-Mindlin law of the studies (its masses read by the batch and
+// the near stream) over several slabs per round.
+TEST(ThreadDeterminism, RestitutionHertzMindlinOverManySlabsIsThreadCountIndependent) {
+  using Model = ContactModel<HertzRestitutionNormal, CoulombTangential>;
+  int slabs = 0;
+  expect_thread_count_independent(
+      Model{HertzRestitutionNormal::uniform(7.2e4, 0.3),
+            CoulombTangential::uniform(6.4e4, 0.4, 0.5, 0.5, CoulombTangential::MindlinRestitution),
+            {}},
       3000, 1500, &slabs);
   EXPECT_GE(slabs, 6);
 }
