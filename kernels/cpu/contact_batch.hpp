@@ -1,8 +1,8 @@
 // Contacts evaluated in batches, four per instruction, for the host one-pass force kernel
-// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs), for two laws (BatchLaw): the
-// frictional peer benchmark's and the linear element tests' (linear normal spring-dashpot with
-// the constant Coulomb tangential spring), and the studies' restitution-damped Hertz-Mindlin
-// law (waves, mixtures, Hertz element tests); no rolling.
+// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs), for three laws (BatchLaw): the
+// linear law of the frictional peer benchmark and the linear element tests (spring-dashpot with
+// the constant Coulomb spring), the restitution-damped Hertz-Mindlin law (waves, impacts, the
+// Hertz peer benchmark) and the visco-elastic Hertz law (Hertz moduli, mixtures); no rolling.
 //
 // A slab's rows are read in order; the touching contacts of whole rows are gathered into a
 // batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
@@ -346,13 +346,15 @@ struct ContactBatch {
       mstar = reduced_pair(l.mi, l.mj);
       fn = hertz_restitution_force(p.kn, p.gn, reduced_pair(l.ai, l.aj), mstar, delta, -vn, scale);
     } else if constexpr (L == BatchLaw::Hertz) {
-      // The lengths as reduced_radius and pair_diameter form them (no wall here).
-      const V reduced = reduced_pair(l.ai, l.aj), diameter = l.ai + l.aj;
-      fn = hertz_force(p.kn, p.gn, form.reduced_radius ? reduced : diameter, delta, -vn);
+      // The lengths as reduced_radius and pair_diameter form them (no wall here), each formed
+      // only where the form uses it.
+      const bool normal_r = form.reduced_radius;
+      const bool spring_r = form.tangential == CoulombTangential::MindlinReducedRadius;
+      const V reduced = normal_r || spring_r ? reduced_pair(l.ai, l.aj) : l.ai;
+      const V diameter = !normal_r || !spring_r ? l.ai + l.aj : l.ai;
+      fn = hertz_force(p.kn, p.gn, normal_r ? reduced : diameter, delta, -vn);
       if (form.tangential != CoulombTangential::Constant)
-        scale = lane_sqrt(
-            (form.tangential == CoulombTangential::MindlinPairDiameter ? diameter : reduced) *
-            delta);
+        scale = lane_sqrt((spring_r ? reduced : diameter) * delta);
     } else {
       fn = linear_normal_force(p.kn, p.gn, delta, -vn);
     }
