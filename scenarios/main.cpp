@@ -8,6 +8,7 @@
 #include "core/io/scene_file.hpp"
 #include "core/run/ensemble.hpp"
 #include "core/run/error.hpp"
+#include "core/run/kernel_times.hpp"
 #include "core/run/progress.hpp"
 #include "granular_config.hpp"
 #include "kernels/cpu/force_slabs.hpp"
@@ -48,6 +49,10 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   run->add_flag("--quiet", quiet, "no progress lines");
   run->add_flag("--resume", resume, "continue from the checkpoint in the output directory");
+  bool kernel_times = false;
+  run->add_flag("--kernel-times", kernel_times,
+                "write kernel_times.json beside the results: wall seconds per kernel and per "
+                "phase of the run (docs/speed.md)");
   run->add_option("--stop-after-minutes", stop_after_minutes,
                   "stop at the first checkpoint after this wall time (elastic_moduli); "
                   "continue with --resume")
@@ -165,8 +170,15 @@ int main(int argc, char** argv) {
       entry.run(scene, opts);
       if (root) std::cout << scene_path << ": every key read and checked (" << entry.name << ")\n";
     } else if (root) {
+      if (kernel_times) granular::kernel_times::start();
       granular::run_scene(entry, scene, opts);  // the driver, then the run record and report
       std::cout << "results in " << opts.out_dir << "\n";
+      if (kernel_times) {
+        granular::kernel_times::stop();
+        const std::string path = opts.out_dir + "/kernel_times.json";
+        granular::write_text_file(path, granular::kernel_times::json().dump() + "\n");
+        std::cout << "kernel times in " << path << "\n";
+      }
     } else if (entry.spreads_over_ranks) {
       entry.run(scene, opts);  // its share of the units; rank 0 writes every output
     } else if (granular::ensemble::rank() == 1) {

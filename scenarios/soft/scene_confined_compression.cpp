@@ -8,9 +8,11 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <optional>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
+#include "core/run/kernel_times.hpp"
 #include "core/run/progress.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/common/box_fill.hpp"
@@ -268,6 +270,8 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
   };
   // Frames at the first sample at or after every k steps, one series per model.
   SnapshotSeries series(opts.out_dir, "snapshots_" + label, c.snapshot_every);
+  // The kernel timer's phase spans exactly what wall_seconds times.
+  std::optional<KernelRegion> region(std::in_place, "compression " + label);
   const auto t0 = std::chrono::steady_clock::now();
   sample();
   series.sample(sys);
@@ -300,6 +304,7 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
     }
   }
   out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  region.reset();
   series.finish(sys);  // after the timing: the model's cost excludes the snapshot files
   out.steps = sys.steps();
   progress.finish();
@@ -320,7 +325,10 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   Json prep = Json::object();
   ConfigState state;
   const auto t0 = std::chrono::steady_clock::now();
-  with_material_model(c.mats, [&](const auto& m) { state = prepare(m, c, opts, prep); });
+  {
+    KernelRegion region("preparation");
+    with_material_model(c.mats, [&](const auto& m) { state = prepare(m, c, opts, prep); });
+  }
   prep["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   summary["preparation"] = prep;
