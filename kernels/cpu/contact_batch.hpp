@@ -214,6 +214,14 @@ struct ContactBatch {
   alignas(32) double f0[kCap + kW], f1[kCap + kW], f2[kCap + kW];
   alignas(32) double q0[kCap + kW], q1[kCap + kW], q2[kCap + kW];
   alignas(32) double p0[kCap + kW], p1[kCap + kW], p2[kCap + kW];
+  // Outputs of evaluate<L, true> only: the normal force and the contact frame (normal, overlap),
+  // which the multi-contact laws read back (kernels/dem/multicontact.hpp).
+  alignas(32) double fn[kCap + kW], n0[kCap + kW], n1[kCap + kW], n2[kCap + kW];
+  alignas(32) double overlap[kCap + kW];
+  // Inputs of evaluate<L, Frame, true> only: the normal law sees the overlap plus two
+  // corrections (MC-strain's displacements of both particles, kernels/dem/multicontact.hpp),
+  // ((delta + c0) + c1) clamped at 0; the tangential law and the levers keep the overlap.
+  alignas(32) double c0[kCap + kW], c1[kCap + kW];
 
   GRANULAR_AVX_INLINE static V load(const double* a) { return simd4::load(a); }
   GRANULAR_AVX_INLINE static void store(double* a, V v) { simd4::store(a, v); }
@@ -282,13 +290,17 @@ struct ContactBatch {
   // the tangent plane, and the torques. The operations follow pair_geometry, the normal law's
   // force, CoulombTangential::force (rotate_into_plane, coulomb_spring) and
   // ContactModel::evaluate. Only where cpu_has_avx().
-  template <BatchLaw L>
+  // `Frame`: also store fn, n0 .. n2 and overlap. `Corrected`: read c0, c1.
+  template <BatchLaw L, bool Frame = false, bool Corrected = false>
   void evaluate(double dt) {
     pad();
+    if constexpr (Corrected)
+      for (int c = n; n > 0 && c < (n + kW - 1) / kW * kW; ++c)
+        c0[c] = c0[n - 1], c1[c] = c1[n - 1];
     if (uniform)
-      evaluate_lanes<L, true>(dt);
+      evaluate_lanes<L, true, Frame, Corrected>(dt);
     else
-      evaluate_lanes<L, false>(dt);
+      evaluate_lanes<L, false, Frame, Corrected>(dt);
   }
 
   // One vector of contacts: the law's inputs (the spring s0..s2 in and out) and outputs.
@@ -296,6 +308,8 @@ struct ContactBatch {
     V X, Y, Z, ai, aj, d0, d1, d2, wi0, wi1, wi2, wj0, wj1, wj2, s0, s1, s2;
     V mi, mj;                              // masses (read by the Hertz law only)
     V F0, F1, F2, q0, q1, q2, p0, p1, p2;  // force on i, torques on i and j
+    V Fn, N0, N1, N2, Dl;                  // normal force, normal and overlap
+    V C0, C1;                              // the normal law's corrections (Corrected)
   };
   struct LaneParams {
     V kn, gn, kt, gt, mus, mud;
@@ -304,7 +318,7 @@ struct ContactBatch {
     return {splat(p.kn), splat(p.gn), splat(p.kt), splat(p.gt), splat(p.mus), splat(p.mud)};
   }
 
-  template <BatchLaw L, bool Uniform>
+  template <BatchLaw L, bool Uniform, bool Frame, bool Corrected>
   GRANULAR_AVX void evaluate_lanes(double dt) {
     const V vdt = splat(dt);
     for (int c = 0; c < n; c += kW) {
@@ -319,11 +333,16 @@ struct ContactBatch {
       const LaneParams p{par<Uniform>(kn + c, u.kn),   par<Uniform>(gn + c, u.gn),
                          par<Uniform>(kt + c, u.kt),   par<Uniform>(gt + c, u.gt),
                          par<Uniform>(mus + c, u.mus), par<Uniform>(mud + c, u.mud)};
-      law<L>(l, p, vdt, form);
+      if constexpr (Corrected) l.C0 = load(c0 + c), l.C1 = load(c1 + c);
+      law<L, Corrected>(l, p, vdt, form);
       store(h0 + c, l.s0), store(h1 + c, l.s1), store(h2 + c, l.s2);
       store(q0 + c, l.q0), store(q1 + c, l.q1), store(q2 + c, l.q2);
       store(p0 + c, l.p0), store(p1 + c, l.p1), store(p2 + c, l.p2);
       store(f0 + c, l.F0), store(f1 + c, l.F1), store(f2 + c, l.F2);
+      if constexpr (Frame) {
+        store(fn + c, l.Fn), store(overlap + c, l.Dl);
+        store(n0 + c, l.N0), store(n1 + c, l.N1), store(n2 + c, l.N2);
+      }
     }
   }
 
@@ -333,7 +352,9 @@ struct ContactBatch {
   // law's spring, the torques). The rare branches are taken only where a lane in `active`
   // needs them: the other lanes (apart pairs of the stream) are not used, and must not send a
   // vector down a branch.
-  template <BatchLaw L>
+  // `Corrected`: the normal law sees ((delta + C0) + C1) clamped at 0
+  // (evaluate_with_normal_overlap, kernels/dem/multicontact.hpp), the rest the overlap itself.
+  template <BatchLaw L, bool Corrected = false>
   GRANULAR_AVX_INLINE static void law(Lanes& l, const LaneParams& p, V vdt, const BatchForm& form,
                                       M active = M{-1, -1, -1, -1}) {
     constexpr bool restitution = L == BatchLaw::HertzRestitution;
@@ -341,10 +362,17 @@ struct ContactBatch {
     const V dv[3] = {l.d0, l.d1, l.d2};
     V n[3], delta, vn;
     contact_frame(r, l.X * l.X + l.Y * l.Y + l.Z * l.Z, l.ai, l.aj, dv, n, delta, vn);
+    V dn = delta;  // the normal law's overlap
+    if constexpr (Corrected) {
+      const V de = delta + l.C0 + l.C1;
+      dn = sel(de > splat(0.0), de, splat(0.0));
+    }
     V fn, scale{}, mstar{};  // scale: the Mindlin spring's sqrt(L delta)
     if constexpr (restitution) {
       mstar = reduced_pair(l.mi, l.mj);
-      fn = hertz_restitution_force(p.kn, p.gn, reduced_pair(l.ai, l.aj), mstar, delta, -vn, scale);
+      const V R = reduced_pair(l.ai, l.aj);
+      fn = hertz_restitution_force(p.kn, p.gn, R, mstar, dn, -vn, scale);
+      if constexpr (Corrected) scale = lane_sqrt(R * delta);  // the spring's, uncorrected
     } else if constexpr (L == BatchLaw::Hertz) {
       // The lengths as reduced_radius and pair_diameter form them (no wall here), each formed
       // only where the form uses it.
@@ -352,11 +380,11 @@ struct ContactBatch {
       const bool spring_r = form.tangential == CoulombTangential::MindlinReducedRadius;
       const V reduced = normal_r || spring_r ? reduced_pair(l.ai, l.aj) : l.ai;
       const V diameter = !normal_r || !spring_r ? l.ai + l.aj : l.ai;
-      fn = hertz_force(p.kn, p.gn, normal_r ? reduced : diameter, delta, -vn);
+      fn = hertz_force(p.kn, p.gn, normal_r ? reduced : diameter, dn, -vn);
       if (form.tangential != CoulombTangential::Constant)
         scale = lane_sqrt((spring_r ? reduced : diameter) * delta);
     } else {
-      fn = linear_normal_force(p.kn, p.gn, delta, -vn);
+      fn = linear_normal_force(p.kn, p.gn, dn, -vn);
     }
     const V wi[3] = {l.wi0, l.wi1, l.wi2}, wj[3] = {l.wj0, l.wj1, l.wj2};
     V li, lj, vt[3];
@@ -375,6 +403,7 @@ struct ContactBatch {
     coulomb_spring_lanes(s, vt, k, g, p.mus, p.mud, fn, t, !restitution, active);
     l.s0 = s[0], l.s1 = s[1], l.s2 = s[2];
     l.F0 = fn * n[0] + t[0], l.F1 = fn * n[1] + t[1], l.F2 = fn * n[2] + t[2];
+    l.Fn = fn, l.N0 = n[0], l.N1 = n[1], l.N2 = n[2], l.Dl = delta;
     V q[3], qj[3];
     contact_torques(n, t, li, lj, q, qj);
     l.q0 = q[0], l.q1 = q[1], l.q2 = q[2];

@@ -112,6 +112,8 @@ struct ParticleViews {
 // compiles exactly the classical kernel (same arithmetic, same results bit for bit).
 struct NoPairHook {
   static constexpr bool active = false;
+  static constexpr bool batchable = false;  // see compute_pair_forces_batched
+  static constexpr bool corrected = false;
   static constexpr const char* label = "dem::compute_forces::pairs";
   template <class Model>
   KOKKOS_INLINE_FUNCTION void evaluate(const Model&, int, const PairState&, double, double*,
@@ -595,6 +597,117 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
 }
 #endif
 
+// Which force pass a backend uses: one pass by slabs where threads are few and share
+// memory, the two passes on a device.
+template <class ExecSpace>
+constexpr bool forces_by_slabs() {
+  return std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>;
+}
+
+#if GRANULAR_CONTACT_BATCH
+// compute_pair_forces with the touching contacts evaluated in batches (ContactBatch), for the
+// multi-contact laws whose hook records what the law gave (Hook::batchable: Hook::record(k, s,
+// fn) with the contact's frame and normal force) and at most corrects the normal law's overlap
+// (Hook::corrected: Hook::corrections(k, c0, c1), the normal law then sees ((delta + c0) + c1)
+// clamped at 0). The same rows, histories
+// and records, bit for bit: the lanes round as the scalar law does, and every contact's
+// outputs go to its own entry row, so a batch may end anywhere in a particle's row.
+template <class ExecSpace, class Model, class HistoryView, class PairView, class Hook>
+void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                                 const HistoryView& history, const PairView& pair,
+                                 const PeriodicBox& box, const Model& m,
+                                 const double strain_rate[3], double dt, const Hook& hook) {
+  constexpr int H = Model::history;
+  static_assert(H == 3 && Model::rotations, "the batched law has a tangential spring");
+  using Law = ContactBatchLaw<Model>;
+  constexpr BatchLaw L = Law::law;
+  constexpr int kTask = 64;  // particles per task
+  const HostParticleViews hv(p);
+  const HostListRows list(nl);
+  double* const hist = history.data();
+  const PeriodicBox b = box;
+  const double rt[3] = {strain_rate[0], strain_rate[1], strain_rate[2]};
+  const bool uniform = Law::uniform(m);
+  const BatchParams up = Law::pair(m, 0, 0);
+  const BatchForm form = Law::form(m);
+  const int n = p.n, tasks = (n + kTask - 1) / kTask;
+  using Policy = Kokkos::RangePolicy<ExecSpace, Kokkos::Schedule<Kokkos::Dynamic>>;
+  Kokkos::parallel_for(Hook::batched_label, Policy(0, tasks), [=](const int t) {
+    const double r3[3] = {rt[0], rt[1], rt[2]};
+    ContactBatch cb;
+    if (uniform) cb.set_uniform(up);
+    cb.form = form;
+    int entry[ContactBatch::kCap], si[ContactBatch::kCap], sj[ContactBatch::kCap];
+    auto flush = [&] {
+      cb.evaluate<L, true, Hook::corrected>(dt);
+      for (int c = 0; c < cb.n; ++c) {
+        const int k = entry[c];
+        pair(k, 0) = cb.f0[c], pair(k, 1) = cb.f1[c], pair(k, 2) = cb.f2[c];
+        pair(k, 3) = cb.q0[c], pair(k, 4) = cb.q1[c], pair(k, 5) = cb.q2[c];
+        pair(k, 6) = cb.p0[c], pair(k, 7) = cb.p1[c], pair(k, 8) = cb.p2[c];
+        double* h = hist + cb.k[c] * H;
+        h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
+        PairState s{};
+        s.n[0] = cb.n0[c], s.n[1] = cb.n1[c], s.n[2] = cb.n2[c];
+        s.delta = cb.overlap[c];
+        s.ai = cb.ai[c], s.aj = cb.aj[c];
+        s.si = si[c], s.sj = sj[c];
+        s.wall = false;
+        hook.record(k, s, cb.fn[c]);
+      }
+      cb.n = cb.rows = 0;
+    };
+    const int i1 = (t + 1) * kTask < n ? (t + 1) * kTask : n;
+    for (int i = t * kTask; i < i1; ++i) {
+      const Body bi = load_body(hv, i, true);
+      const int row0 = list.pair_begin(i) - list.offsets(i);  // history row of entry k
+      for (int k = list.offsets(i); k < list.owned_end(i); ++k) {
+        const int j = list.neighbors(k);
+        double rx, ry, rz, r2;
+        if (!touching(hv, b, bi, j, rx, ry, rz, r2)) {  // as compute_pair_forces
+          for (int c = 0; c < 9; ++c) pair(k, c) = 0.0;
+          forget_history<H>(hist, row0 + k);
+          hook.apart(k);
+          continue;
+        }
+        const int c = cb.n++;
+        entry[c] = k, cb.k[c] = row0 + k, cb.j[c] = j;
+        cb.rx[c] = rx, cb.ry[c] = ry, cb.rz[c] = rz;
+        const Body bj = load_body(hv, j, true);
+        cb.set_motion<L == BatchLaw::HertzRestitution>(c, bi, bj, r3, hist + (row0 + k) * H);
+        if (!cb.uniform) cb.set_params(c, Law::pair(m, bi.s, bj.s));
+        si[c] = bi.s, sj[c] = bj.s;
+        if constexpr (Hook::corrected) hook.corrections(k, cb.c0[c], cb.c1[c]);
+        if (cb.n == ContactBatch::kCap) flush();
+      }
+    }
+    if (cb.n > 0) flush();
+  });
+}
+#endif
+
+// compute_pair_forces through the batch where it applies (a host backend with AVX, a law the
+// batch has, a hook that only records, `batched`); returns whether it did.
+template <class ExecSpace, class Model, class HistoryView, class PairView, class Hook>
+bool pair_forces_batched_if_possible(const Particles<ExecSpace>& p,
+                                     const NeighborList<ExecSpace>& nl, const HistoryView& history,
+                                     const PairView& pair, const PeriodicBox& box,
+                                     const Model& model, const double strain_rate[3], double dt,
+                                     const Hook& hook, bool batched) {
+#if GRANULAR_CONTACT_BATCH
+  if constexpr (forces_by_slabs<ExecSpace>() && ContactBatchLaw<Model>::available &&
+                Hook::batchable) {
+    if (batched && cpu_has_avx() && ContactBatchLaw<Model>::usable(model)) {
+      compute_pair_forces_batched(p, nl, history, pair, box, model, strain_rate, dt, hook);
+      return true;
+    }
+  }
+#endif
+  (void)p, (void)nl, (void)history, (void)pair, (void)box, (void)model, (void)strain_rate;
+  (void)dt, (void)hook, (void)batched;
+  return false;
+}
+
 // The slabs of the one-pass kernel below, in three rounds (see there), reading the rows as
 // Mode says.
 template <class ExecSpace, class Model, NearMode Mode>
@@ -745,13 +858,6 @@ void compute_forces_by_slabs(const Particles<ExecSpace>& p, const NeighborList<E
   else
     one_pass_slabs<ExecSpace, Model, NearMode::Record>(hv, b, m, list, order, slab_begin, hist, fh,
                                                        qh, rate, dt, nr, slabs, batched);
-}
-
-// Which force pass a backend uses: one pass by slabs where threads are few and share
-// memory, the two passes on a device.
-template <class ExecSpace>
-constexpr bool forces_by_slabs() {
-  return std::is_same_v<typename ExecSpace::memory_space, Kokkos::HostSpace>;
 }
 
 template <class ExecSpace, class Model, class HistoryView, class PairView>

@@ -560,7 +560,8 @@ class DemSystem {
               bool tracked = false, const double* pack = nullptr) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
-                  wall_history_, wall_record_, params_.gravity, external_);
+                  wall_history_, wall_record_, params_.gravity, external_,
+                  params_.batched_contacts);
       return;
     }
     NearRows rows = near_rows(tracked);

@@ -115,6 +115,32 @@ KOKKOS_INLINE_FUNCTION double strain_overlap(const double nk[3], double lk, doub
   return pref * fk * inv * bracket;
 }
 
+// strain_pair (kernels/contact/lane_law.inc): strain_overlap for both directions of a pair of
+// contacts of one particle at once, for one lane of doubles and for four.
+
+// The sums of MC-strain over the contacts q = 0..nq-1 of one particle: corr(q) += the overlap
+// every other contact with a force causes at q, in ascending order of that contact, each pair
+// of contacts visited once (strain_pair). load(q, n, lever, f) gives contact q (lever 0: not
+// touching, skipped); add(q, v) adds to its sum, which starts at zero.
+template <class Load, class Add>
+KOKKOS_INLINE_FUNCTION void strain_sums(int nq, double pref, double nu, const Load& load,
+                                        const Add& add) {
+  for (int a = 0; a < nq; ++a) {
+    double na[3], la, fa;
+    load(a, na, la, fa);
+    if (la == 0.0) continue;
+    for (int b = a + 1; b < nq; ++b) {
+      double nb[3], lb, fb;
+      load(b, nb, lb, fb);
+      if (lb == 0.0 || (fa == 0.0 && fb == 0.0)) continue;
+      double g_ab, g_ba;
+      strain_pair(na, la, nb, lb, nu, g_ab, g_ba);
+      if (fa != 0.0) add(b, pref * fa * g_ab);
+      if (fb != 0.0) add(a, pref * fb * g_ba);
+    }
+  }
+}
+
 // The model's evaluation with the normal law fed a corrected overlap (clamped at 0), the
 // tangential and rolling laws the geometric state: the correction is a normal displacement
 // and moves neither the contact point nor the tangential spring's geometry.
@@ -143,6 +169,43 @@ KOKKOS_INLINE_FUNCTION void evaluate_with_normal_overlap(const Model& m, const P
   }
 }
 
+#if GRANULAR_CONTACT_BATCH
+// strain_sums over a particle's touching contacts held as arrays (normal n0 n1 n2, lever l,
+// previous force f; padded by three entries), the partners b of each contact a taken four
+// at a time: strain_pair forms every lane as it forms one double, and the
+// terms are added in strain_sums' order, so the same bits. Only where cpu_has_avx().
+GRANULAR_AVX inline void strain_sums_avx(int nt, double pref, double nu, const double* n0,
+                                         const double* n1, const double* n2, const double* l,
+                                         const double* f, double* corr) {
+  using V = simd4::V;
+  const V vnu = simd4::splat(nu);
+  for (int a = 0; a < nt; ++a) {
+    const double fa = f[a];
+    const V na[3] = {simd4::splat(n0[a]), simd4::splat(n1[a]), simd4::splat(n2[a])};
+    const V la = simd4::splat(l[a]);
+    // Contact a's sum in a register from here on (it already holds the terms of the contacts
+    // before a): the same additions in the same order, without a store and reload per term,
+    // which the compiler must otherwise assume corr[b] may alias.
+    double own = corr[a];
+    for (int b0 = a + 1; b0 < nt; b0 += 4) {
+      const V nb[3] = {simd4::load(n0 + b0), simd4::load(n1 + b0), simd4::load(n2 + b0)};
+      V g_ab, g_ba;
+      strain_pair(na, la, nb, simd4::load(l + b0), vnu, g_ab, g_ba);
+      double ab[4], ba[4];
+      simd4::store(ab, g_ab), simd4::store(ba, g_ba);
+      const int lanes = nt - b0 < 4 ? nt - b0 : 4;
+      for (int q = 0; q < lanes; ++q) {
+        const int b = b0 + q;
+        if (fa == 0.0 && f[b] == 0.0) continue;
+        if (fa != 0.0) corr[b] += pref * fa * ab[q];
+        if (f[b] != 0.0) own += pref * f[b] * ba[q];
+      }
+    }
+    corr[a] = own;
+  }
+}
+#endif
+
 namespace multicontact {
 
 // Column indices are enumerators, not constexpr variables: a View's operator() takes its
@@ -155,6 +218,8 @@ constexpr int kStrainEntryColumns = 6;
 // reordered with the particles), then scratch: correction, inward normal (3), lever.
 enum : int { kWForce = 0, kWCorr = 1, kWN = 2, kWLever = 5 };
 constexpr int kStrainWallColumns = 6;
+// Touching contacts of one particle MC-strain sums from the stack (more: from the rows).
+constexpr int kStrainStackContacts = 32;
 // Columns of the MC-stress rows per owner entry: l.f seen from i and from j (each particle's
 // branch vector dotted with the force on it), normal n (3), beta nu A.
 enum : int { kTi = 0, kTj = 1, kTN = 2, kTCoef = 5 };
@@ -183,6 +248,9 @@ template <class Mem>
 struct StrainPairHook {
   static constexpr bool active = true;
   static constexpr const char* label = "dem::multicontact::strain_pairs";
+  // The batch evaluates it with the corrections handed over (compute_pair_forces_batched).
+  static constexpr bool batchable = true, corrected = true;
+  static constexpr const char* batched_label = "dem::multicontact::strain_pairs_batched";
   Kokkos::View<double**, Kokkos::LayoutRight, Mem> scratch, prev;
   Kokkos::View<int*, Mem> mirror;
   template <class Model>
@@ -190,8 +258,12 @@ struct StrainPairHook {
                                        double* h, PairForce& out) const {
     const double delta_eff = s.delta + scratch(k, kSCorr) + scratch(mirror(k), kSCorr);
     evaluate_with_normal_overlap(m, s, delta_eff, dt, h, out);
-    prev(k, 0) = out.fn;
+    record(k, s, out.fn);
   }
+  KOKKOS_INLINE_FUNCTION void corrections(int k, double& c0, double& c1) const {
+    c0 = scratch(k, kSCorr), c1 = scratch(mirror(k), kSCorr);
+  }
+  KOKKOS_INLINE_FUNCTION void record(int k, const PairState&, double fn) const { prev(k, 0) = fn; }
   KOKKOS_INLINE_FUNCTION void apart(int k) const { prev(k, 0) = 0.0; }
 };
 
@@ -221,6 +293,9 @@ template <class Mem>
 struct StressPairHook {
   static constexpr bool active = true;
   static constexpr const char* label = "dem::multicontact::stress_pairs";
+  // The classical law, then a record of its result: the batch may evaluate it (record only).
+  static constexpr bool batchable = true, corrected = false;
+  static constexpr const char* batched_label = "dem::multicontact::stress_pairs_batched";
   Kokkos::View<double**, Kokkos::LayoutRight, Mem> rows;
   double nu[kMaxSpecies];
   double beta;
@@ -229,9 +304,13 @@ struct StressPairHook {
   KOKKOS_INLINE_FUNCTION void evaluate(const Model& m, int k, const PairState& s, double dt,
                                        double* h, PairForce& out) const {
     m.evaluate(s, dt, h, out);
+    record(k, s, out.fn);
+  }
+  // What the corrections need of contact k: reads s.n, s.delta, s.ai, s.aj, s.si, s.sj.
+  KOKKOS_INLINE_FUNCTION void record(int k, const PairState& s, double fn) const {
     // Seen from j the normal and the force both flip: l_j.f_j = -lambda_j fn as well.
-    rows(k, kTi) = -(s.ai - 0.5 * s.delta) * out.fn;
-    rows(k, kTj) = -(s.aj - 0.5 * s.delta) * out.fn;
+    rows(k, kTi) = -(s.ai - 0.5 * s.delta) * fn;
+    rows(k, kTj) = -(s.aj - 0.5 * s.delta) * fn;
     for (int d = 0; d < 3; ++d) rows(k, kTN + d) = s.n[d];
     // Area A = pi R* delta (Hertz) or pi R*^2; nu of the pair: mean of the two species.
     const double nu_ij = 0.5 * (nu[s.si] + nu[s.sj]);
@@ -335,13 +414,16 @@ class MultiContactForces {
                const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                const Model& model, const Damping& damping, const double strain_rate[3], double dt,
                const WallSet<ExecSpace>& walls, const WallHistoryView& wall_history,
-               const RecordView& record, const double gravity[3], bool external) const {
+               const RecordView& record, const double gravity[3], bool external,
+               bool batched = true) const {
     const int nw = walls.size();
     const int nmc = opt_.walls ? nw : 0;  // walls the law sees
     if (opt_.mode == MultiContact::Strain) {
       strain_corrections(p, nl, box, walls, nmc);
       multicontact::StrainPairHook<mem> hook{entry_, prev_.values(), nl.mirror()};
-      compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
+      if (!pair_forces_batched_if_possible(p, nl, history, pair, box, model, strain_rate, dt, hook,
+                                           batched))
+        compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
       gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
       if (nmc > 0)
         add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt,
@@ -354,8 +436,10 @@ class MultiContactForces {
       hook.beta = opt_.beta;
       hook.particle_area = opt_.area == MultiContact::ParticleArea;
       for (int s = 0; s < kMaxSpecies; ++s) hook.nu[s] = opt_.poisson[s];
-      compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
-      stress_traces(p, nl, walls, nmc, wall_history, model, dt);
+      if (!pair_forces_batched_if_possible(p, nl, history, pair, box, model, strain_rate, dt, hook,
+                                           batched))
+        compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
+      stress_traces(p, nl, walls, nmc, wall_history, model);
       stress_corrections(p, nl, pair);
       gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
       if (nmc > 0) {
@@ -374,10 +458,11 @@ class MultiContactForces {
   // The passes below are public only because nvcc rejects extended lambdas whose enclosing
   // member function is private; they are not meant to be called from outside.
 
-  // MC-strain, before the pair pass: each particle describes each of its contacts (inward
-  // normal, lever, previous force; pair entries in list order, then walls) and sums, for
-  // each, the overlap its other contacts cause there with its own E and nu. Each particle
-  // writes only its own rows and sums in a fixed order: no atomics, thread-count independent.
+  // MC-strain, before the pair pass: each contact is described for both its particles (inward
+  // normal, lever, previous force; written once per list entry, by the contact's owner), then
+  // each particle sums, for each of its contacts (pair entries in list order, then walls), the
+  // overlap its other contacts cause there with its own E and nu, writing only its own rows,
+  // in a fixed order: no atomics, thread-count independent.
   void strain_corrections(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                           const PeriodicBox& box, const WallSet<ExecSpace>& walls, int nmc) const {
     using namespace multicontact;
@@ -393,25 +478,41 @@ class MultiContactForces {
       mat.pref[s] =
           opt_.young[s] > 0 ? -opt_.gamma * (1.0 + mat.nu[s]) / (2.0 * M_PI * opt_.young[s]) : 0.0;
     }
+    // Four partners at a time where the host has AVX (the same bits: strain_sums_avx).
+    const bool avx = forces_by_slabs<ExecSpace>() && cpu_has_avx();
+    (void)avx;
+    // Each contact's geometry, by its owner for both sides: the partner's view is the same
+    // numbers seen from the other end (n flips, r and delta are the same sums; min_image is odd),
+    // so the bits of computing it twice at half the roots and divisions.
+    Kokkos::parallel_for(
+        "dem::multicontact::strain_geometry", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+        KOKKOS_LAMBDA(const int i) {
+          const Body bi = load_body(pv, i, false);
+          for (int k = offsets(i); k < owned_end(i); ++k) {
+            const int j = neighbors(k), m = mirror(k);
+            double rx, ry, rz, r2;
+            if (!touching(pv, b, bi, j, rx, ry, rz, r2)) {
+              entry(k, kSLever) = 0.0, entry(k, kSCorr) = 0.0;
+              entry(m, kSLever) = 0.0, entry(m, kSCorr) = 0.0;
+              continue;
+            }
+            const double r = Kokkos::Experimental::sqrt(r2);
+            const double inv = 1.0 / r;
+            const double aj = pv.radius(j);
+            const double delta = bi.a + aj - r;
+            const double n[3] = {rx * inv, ry * inv, rz * inv};
+            for (int d = 0; d < 3; ++d) entry(k, kSN + d) = n[d], entry(m, kSN + d) = -n[d];
+            entry(k, kSLever) = bi.a - 0.5 * delta;
+            entry(m, kSLever) = aj - 0.5 * delta;
+            entry(k, kSForce) = entry(m, kSForce) = prev(k, 0);
+          }
+        });
     Kokkos::parallel_for(
         "dem::multicontact::strain_overlaps", Kokkos::RangePolicy<ExecSpace>(0, p.n),
         KOKKOS_LAMBDA(const int i) {
           constexpr int C = kStrainWallColumns;
           const Body bi = load_body(pv, i, false);
-          const int k0 = offsets(i), k1 = offsets(i + 1), own = owned_end(i);
-          for (int k = k0; k < k1; ++k) {
-            double rx, ry, rz, r2;
-            if (!touching(pv, b, bi, neighbors(k), rx, ry, rz, r2)) {
-              entry(k, kSLever) = 0.0, entry(k, kSCorr) = 0.0;
-              continue;
-            }
-            const double r = Kokkos::Experimental::sqrt(r2);
-            const double inv = 1.0 / r;
-            const double delta = bi.a + pv.radius(neighbors(k)) - r;
-            entry(k, kSN) = rx * inv, entry(k, kSN + 1) = ry * inv, entry(k, kSN + 2) = rz * inv;
-            entry(k, kSLever) = bi.a - 0.5 * delta;
-            entry(k, kSForce) = prev(k < own ? k : mirror(k), 0);
-          }
+          const int k0 = offsets(i), k1 = offsets(i + 1);
           for (int w = 0; w < nmc; ++w) {
             PairState s;
             if (!wall_geometry(bi, wv(w), false, s)) {
@@ -422,9 +523,16 @@ class MultiContactForces {
             wall(i, w * C + kWLever) = bi.a - 0.5 * s.delta;
           }
           const double pf = mat.pref[bi.s], nus = mat.nu[bi.s];
-          // Contact q of i: entries first (list order), then walls.
+          // Contact q of i: entries first (list order), then walls. The touching ones are
+          // summed from a copy on the stack; a particle with more of them than it holds
+          // (never in a packing of spheres of similar size) sums from the rows, in the same
+          // order and to the same bits.
           const int ne = k1 - k0, nq = ne + nmc;
-          auto load = [&](int q, double n[3], double& lever, double& f) {
+          int nt = 0;
+          constexpr int K = kStrainStackContacts, P = K + 3;  // padded for four lanes
+          int at[K];
+          double t0[P], t1[P], t2[P], tl[P], tf[P], tc[P];
+          auto load_row = [&](int q, double n[3], double& lever, double& f) {
             if (q < ne) {
               const int k = k0 + q;
               for (int d = 0; d < 3; ++d) n[d] = entry(k, kSN + d);
@@ -435,22 +543,54 @@ class MultiContactForces {
               lever = wall(i, w * C + kWLever), f = wall(i, w * C + kWForce);
             }
           };
-          for (int qc = 0; qc < nq; ++qc) {
-            double nc[3], lc, fc;
-            load(qc, nc, lc, fc);
-            if (lc == 0.0) continue;  // not touching
-            double sum = 0.0;
-            for (int qk = 0; qk < nq; ++qk) {
-              if (qk == qc) continue;
-              double nk[3], lk, fk;
-              load(qk, nk, lk, fk);
-              if (lk == 0.0 || fk == 0.0) continue;  // no contact, or no force on it yet
-              sum += strain_overlap(nk, lk, fk, nc, lc, pf, nus);
+          for (int q = 0; q < nq && nt <= K; ++q) {
+            double n[3], lever, f;
+            load_row(q, n, lever, f);
+            if (lever == 0.0) continue;
+            if (nt == K) {
+              ++nt;  // too many: sum from the rows
+              break;
             }
-            if (qc < ne)
-              entry(k0 + qc, kSCorr) = sum;
+            at[nt] = q;
+            t0[nt] = n[0], t1[nt] = n[1], t2[nt] = n[2];
+            tl[nt] = lever, tf[nt] = f, tc[nt] = 0.0;
+            ++nt;
+          }
+          auto store = [&](int q, double v) {
+            if (q < ne)
+              entry(k0 + q, kSCorr) = v;
             else
-              wall(i, (qc - ne) * C + kWCorr) = sum;
+              wall(i, (q - ne) * C + kWCorr) = v;
+          };
+          if (nt <= K) {
+            bool done = false;
+#if GRANULAR_CONTACT_BATCH && !defined(__CUDA_ARCH__)
+            if (avx && nt > 1) {
+              // The lanes past the last contact repeat it (formed, never added).
+              for (int t = nt; t < P; ++t)
+                t0[t] = t0[nt - 1], t1[t] = t1[nt - 1], t2[t] = t2[nt - 1], tl[t] = tl[nt - 1],
+                tf[t] = tf[nt - 1];
+              strain_sums_avx(nt, pf, nus, t0, t1, t2, tl, tf, tc);
+              done = true;
+            }
+#endif
+            if (!done)
+              strain_sums(
+                  nt, pf, nus,
+                  [&](int t, double n[3], double& lever, double& f) {
+                    n[0] = t0[t], n[1] = t1[t], n[2] = t2[t];
+                    lever = tl[t], f = tf[t];
+                  },
+                  [&](int t, double v) { tc[t] += v; });
+            for (int t = 0; t < nt; ++t) store(at[t], tc[t]);
+          } else {
+            for (int q = 0; q < nq; ++q) store(q, 0.0);
+            strain_sums(nq, pf, nus, load_row, [&](int q, double v) {
+              if (q < ne)
+                entry(k0 + q, kSCorr) += v;
+              else
+                wall(i, (q - ne) * C + kWCorr) += v;
+            });
           }
         });
   }
@@ -494,13 +634,13 @@ class MultiContactForces {
   }
 
   // MC-stress, after the classical pair pass: sum_c l.f per particle (pair entries in list
-  // order, then walls). Wall contacts are evaluated here once more with a copy of their
-  // history (the wall pass comes after the gather and advances it); their l.f is kept so
-  // the wall pass can take the contact's own term out of the trace exactly.
+  // order, then walls). The normal force of each wall contact is evaluated here once more from
+  // a copy of its history (the wall pass comes after the gather and advances it); its l.f is kept
+  // so the wall pass can take the contact's own term out of the trace exactly.
   template <class Model, class WallHistoryView>
   void stress_traces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                      const WallSet<ExecSpace>& walls, int nmc, const WallHistoryView& history,
-                     const Model& model, double dt) const {
+                     const Model& model) const {
     using namespace multicontact;
     const ParticleViews<ExecSpace> pv(p);
     auto offsets = nl.offsets(), mirror = nl.mirror(), owned_end = nl.owned_end();
@@ -529,9 +669,10 @@ class MultiContactForces {
               double h[H > 0 ? H : 1];
               if constexpr (H > 0)
                 for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
-              PairForce out;
-              m.evaluate(s, dt, h, out);
-              const double lf = -(s.ai - 0.5 * s.delta) * out.fn;
+              // The normal force alone: the model's evaluation forms it first, from the same
+              // state and history, and the tangential and rolling parts do not change it.
+              const double fn = m.normal.force(s, h + Model::normal_offset);
+              const double lf = -(s.ai - 0.5 * s.delta) * fn;
               own(i, w) = lf;
               t += lf;
             }

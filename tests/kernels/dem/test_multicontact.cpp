@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "core/dem/walls.hpp"
+#include "core/run/kernel_times.hpp"
+#include "kernels/cpu/contact_batch.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "kernels/dem/multicontact.hpp"
 #include "tests/exec_spaces.hpp"
@@ -132,10 +134,11 @@ HostParticles cluster(int per_side, double spacing, double speed, unsigned seed)
 template <class Exec, class Model>
 std::vector<double> trajectory(const Model& model, const HostParticles& h, const PeriodicBox& box,
                                const std::vector<WallSpec>& walls, const MultiContact* mc,
-                               long steps, double gravity = 0.0) {
+                               long steps, double gravity = 0.0, bool batched = true) {
   DemParams prm = params();
   prm.gravity[2] = gravity;
   DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
+  sys.set_batched_contacts(batched);
   if (!walls.empty()) sys.set_walls(walls);
   if (mc) sys.set_multicontact(*mc);
   std::vector<double> out;
@@ -279,6 +282,171 @@ TYPED_TEST(MultiContactTest, StrainCorrectionMatchesHandEvaluationForOppositeCon
   EXPECT_NEAR(f[6], fc, 1e-12 * fc);
   EXPECT_NEAR(f[3], fa - fc, 1e-12 * fc);  // B gets both, exactly the reactions
   for (int q : {1, 2, 4, 5, 7, 8}) EXPECT_EQ(f[q], 0.0);
+}
+
+TEST(MultiContactStrainPair, BothDirectionsMatchTheVectorFormulaAndSwappingGivesTheSameBits) {
+  // strain_pair's scalar form against strain_overlap's vector form, for random normals and
+  // levers (opposite, near-parallel and everything between), and the symmetry the sums use.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), lever(0.5, 1.0);
+  auto unit = [&](double n[3]) {
+    double r = 0;
+    for (int d = 0; d < 3; ++d) n[d] = u(rng), r += n[d] * n[d];
+    r = std::sqrt(r);
+    for (int d = 0; d < 3; ++d) n[d] /= r;
+  };
+  const double pref = -0.7, nu = 0.46, fk = 3.0, fc = 5.0;
+  for (int t = 0; t < 2000; ++t) {
+    double nk[3], nc[3];
+    unit(nk), unit(nc);
+    if (t % 4 == 1)
+      for (int d = 0; d < 3; ++d) nc[d] = -nk[d];  // diametrically opposite
+    const double lk = lever(rng), lc = lever(rng);
+    double g_kc, g_ck, h_kc, h_ck;
+    strain_pair(nk, lk, nc, lc, nu, g_kc, g_ck);
+    strain_pair(nc, lc, nk, lk, nu, h_kc, h_ck);
+    EXPECT_EQ(g_kc, h_ck);
+    EXPECT_EQ(g_ck, h_kc);
+    const double v_kc = strain_overlap(nk, lk, fk, nc, lc, pref, nu);
+    const double v_ck = strain_overlap(nc, lc, fc, nk, lk, pref, nu);
+    EXPECT_NEAR(pref * fk * g_kc, v_kc, 1e-12 * std::fabs(v_kc) + 1e-300) << t;
+    EXPECT_NEAR(pref * fc * g_ck, v_ck, 1e-12 * std::fabs(v_ck) + 1e-300) << t;
+  }
+}
+
+#if GRANULAR_HOST_AVX
+TEST(MultiContactStrainPair, FourPartnersAtATimeGiveTheBitsOfOneAtATime) {
+  // strain_sums_avx against strain_sums over the same contacts (random normals, levers and
+  // forces, some forces zero), every count from 1 to the stack's: the same sums, bit for bit.
+  if (!cpu_has_avx()) GTEST_SKIP() << "no AVX on this processor";
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), lever(0.5, 1.0);
+  constexpr int K = multicontact::kStrainStackContacts, P = K + 3;
+  const double pref = -0.31, nu = 0.42;
+  for (int nt = 1; nt <= K; ++nt) {
+    double n0[P], n1[P], n2[P], l[P], f[P], lanes[P] = {}, one[P] = {};
+    for (int t = 0; t < nt; ++t) {
+      double n[3], r = 0;
+      for (double& c : n) c = u(rng), r += c * c;
+      r = std::sqrt(r);
+      n0[t] = n[0] / r, n1[t] = n[1] / r, n2[t] = n[2] / r;
+      l[t] = lever(rng), f[t] = t % 5 == 2 ? 0.0 : 10 * lever(rng);
+    }
+    for (int t = nt; t < P; ++t)
+      n0[t] = n0[nt - 1], n1[t] = n1[nt - 1], n2[t] = n2[nt - 1], l[t] = l[nt - 1],
+      f[t] = f[nt - 1];
+    strain_sums_avx(nt, pref, nu, n0, n1, n2, l, f, lanes);
+    strain_sums(
+        nt, pref, nu,
+        [&](int t, double n[3], double& lv, double& fv) {
+          n[0] = n0[t], n[1] = n1[t], n[2] = n2[t];
+          lv = l[t], fv = f[t];
+        },
+        [&](int t, double v) { one[t] += v; });
+    for (int t = 0; t < nt; ++t) EXPECT_EQ(lanes[t], one[t]) << nt << " contacts, contact " << t;
+    if (nt > 2) {
+      EXPECT_NE(one[0], 0.0);
+    }
+  }
+}
+#endif
+
+TYPED_TEST(MultiContactTest, StrainCorrectionOfManyContactsMatchesHandEvaluationFromStackAndRows) {
+  using Exec = TypeParam;
+  // A big sphere touched by m small ones spread over its surface (which do not touch each
+  // other), at rest. Each small sphere's only contact is with the big one, so its force is
+  // f_H(delta_j + S(c_j)), S(c_j) the sum over the big sphere's other contacts of the overlap
+  // their previous (classical) forces cause at c_j. m = 20 sums from the stack, m = 40 from
+  // the rows (more touching contacts than the stack holds): both against the hand formula.
+  const double a = kA, as = 0.25 * kA;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> overlap(0.02, 0.08);
+  for (const int m : {20, 40}) {
+    std::vector<std::array<double, 5>> rows{{0, 0, 0, a, 0}};
+    std::vector<std::array<double, 3>> normal;  // big sphere's inward normals
+    std::vector<double> delta;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (int j = 0; j < m; ++j) {
+      const double z = 1.0 - (j + 0.5) * 2.0 / m, r = std::sqrt(1.0 - z * z);
+      const double e[3] = {r * std::cos(golden * j), r * std::sin(golden * j), z};
+      const double dj = overlap(rng) * as, dist = a + as - dj;
+      rows.push_back({dist * e[0], dist * e[1], dist * e[2], as, 0});
+      normal.push_back({-e[0], -e[1], -e[2]});
+      delta.push_back(dj);
+    }
+    DemSystem<Exec, Hertz> sys(Particles<Exec>::from_host(particles(rows)),
+                               open_box(-5 * a, 10 * a), frictionless(), params());
+    const MultiContact mc = law(MultiContact::Strain);
+    sys.set_multicontact(mc);
+    const double estar = estar_pair(kE, kNu, kE, kNu), rstar = a * as / (a + as);
+    std::vector<double> classical(m);
+    for (int j = 0; j < m; ++j) classical[j] = hertz_force(estar, rstar, delta[j]);
+    const auto f = forces(sys);
+    for (int c = 0; c < m; ++c) {
+      const double xc[3] = {-(a - 0.5 * delta[c]) * normal[c][0],
+                            -(a - 0.5 * delta[c]) * normal[c][1],
+                            -(a - 0.5 * delta[c]) * normal[c][2]};
+      double s = 0;
+      for (int k = 0; k < m; ++k) {
+        if (k == c) continue;
+        const double xk[3] = {-(a - 0.5 * delta[k]) * normal[k][0],
+                              -(a - 0.5 * delta[k]) * normal[k][1],
+                              -(a - 0.5 * delta[k]) * normal[k][2]};
+        s += hand_overlap(normal[k].data(), xk, normal[c].data(), xc, classical[k], kE, kNu,
+                          mc.gamma);
+      }
+      const double fj = hertz_force(estar, rstar, delta[c] + s);
+      double fr = 0;  // the force on the small sphere, along the big sphere's outward normal
+      for (int d = 0; d < 3; ++d) fr -= f[3 * (c + 1) + d] * normal[c][d];
+      EXPECT_NEAR(fr, fj, 1e-11 * fj) << "m " << m << " contact " << c;
+      EXPECT_GT(std::fabs(fj - classical[c]), 1e-3 * classical[c]);  // the correction shows
+    }
+  }
+}
+
+TYPED_TEST(MultiContactTest, PairPassesInBatchesGiveTheContactByContactBits) {
+  using Exec = TypeParam;
+  // The pair passes of both laws evaluated four contacts at a time (host, AVX) against the
+  // contact-by-contact passes (MC-stress: the classical law; MC-strain: the law with the
+  // corrected overlap): every step's forces, torques, positions, velocities, spins and wall
+  // loads, bit for bit, for a frictional two-species cluster on a floor under gravity. The
+  // kernel timer shows that the batch ran.
+  using Model = ContactModel<HertzNormal, CoulombTangential>;
+  const double g = kE / (2 * (1 + kNu)), gstar = g / (2 * (2 - kNu));
+  Model model;
+  model.normal = hertz(2.0);
+  model.tangential =
+      CoulombTangential::uniform(8 * gstar, 0.0, 0.5, 0.5, CoulombTangential::MindlinReducedRadius);
+  if (!forces_by_slabs<Exec>() || !cpu_has_avx() || !ContactBatchLaw<Model>::usable(model))
+    GTEST_SKIP() << "no batched contacts on this backend or processor";
+  HostParticles h = cluster(4, 1.9 * kA, 0.2, 3);
+  for (int i = 0; i < h.size(); ++i) h.z[i] += 0.97 * kA;  // the lowest layer presses on the floor
+  for (const auto mode : {MultiContact::Stress, MultiContact::Strain}) {
+    const std::string batched_kernel = mode == MultiContact::Stress
+                                           ? "dem::multicontact::stress_pairs_batched"
+                                           : "dem::multicontact::strain_pairs_batched";
+    auto run = [&](bool batched, long& batched_calls) {
+      const MultiContact mc = law(mode);
+      kernel_times::start(false);
+      const auto out = trajectory<Exec>(model, h, open_box(-10 * kA, 25 * kA), {floor_wall()}, &mc,
+                                        200, -9.81, batched);
+      kernel_times::stop();
+      batched_calls = 0;
+      for (const auto& r : kernel_times::regions())
+        for (const auto& k : r.kernels)
+          if (k.name == batched_kernel) batched_calls += k.calls;
+      return out;
+    };
+    long calls_on = 0, calls_off = 0;
+    const auto on = run(true, calls_on), off = run(false, calls_off);
+    EXPECT_GE(calls_on, 200) << mode;
+    EXPECT_EQ(calls_off, 0) << mode;
+    ASSERT_EQ(on.size(), off.size());
+    size_t differ = 0;
+    for (size_t q = 0; q < on.size(); ++q) differ += on[q] != off[q];
+    EXPECT_EQ(differ, 0u) << mode;
+    EXPECT_GT(max_abs(on), 0.0);
+  }
 }
 
 TYPED_TEST(MultiContactTest, StrainCorrectionMatchesHandEvaluationForWallAndSphereAtRightAngle) {
