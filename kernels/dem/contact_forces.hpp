@@ -609,9 +609,9 @@ constexpr bool forces_by_slabs() {
 // multi-contact laws whose hook records what the law gave (Hook::batchable: Hook::record(k, s,
 // fn) with the contact's frame and normal force) and at most corrects the normal law's overlap
 // (Hook::corrected: Hook::corrections(k, c0, c1), the normal law then sees ((delta + c0) + c1)
-// clamped at 0). The same rows, histories
-// and records, bit for bit: the lanes round as the scalar law does, and every contact's
-// outputs go to its own entry row, so a batch may end anywhere in a particle's row.
+// clamped at 0). The same rows, histories and records, bit for bit: the lanes round as the
+// scalar law does, and every contact's outputs go to its own entry row, so a batch may end
+// anywhere in a particle's row.
 template <class ExecSpace, class Model, class HistoryView, class PairView, class Hook>
 void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                                  const HistoryView& history, const PairView& pair,
@@ -687,7 +687,7 @@ void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborLi
 #endif
 
 // compute_pair_forces through the batch where it applies (a host backend with AVX, a law the
-// batch has, a hook that only records, `batched`); returns whether it did.
+// batch has, a batchable hook, `batched`); returns whether it did.
 template <class ExecSpace, class Model, class HistoryView, class PairView, class Hook>
 bool pair_forces_batched_if_possible(const Particles<ExecSpace>& p,
                                      const NeighborList<ExecSpace>& nl, const HistoryView& history,

@@ -100,6 +100,8 @@ inline double stiffness_factor(const MultiContact& mc, double max_overlap) {
 // contacts in nearly the same direction at very different depths, which two partners cannot
 // produce. With outward normals the denominator would vanish for diametrically opposite
 // contacts (n_k.u = -1), the most common pair of contacts in a squeezed row.
+// This is the law's definition in vector form; the passes sum it through strain_pair
+// (kernels/contact/lane_law.inc), both directions of a pair at once, which the tests hold to it.
 KOKKOS_INLINE_FUNCTION double strain_overlap(const double nk[3], double lk, double fk,
                                              const double nc[3], double lc, double pref,
                                              double nu) {
