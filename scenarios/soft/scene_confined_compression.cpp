@@ -3,12 +3,15 @@
 // tall region, settling under gravity with background damping, the top wall closed at the box
 // height. Then, from that one state, one run per force model (classical Hertz, MC-strain,
 // MC-stress): force on the top wall against strain, the largest force and the wall-clock cost of
-// each model on the same run.
+// each model on the same run. `fill.from` settles another tool's packing instead of the random
+// insertion.
 #include <Kokkos_Core.hpp>
 #include <chrono>
 #include <cmath>
 #include <iostream>
 #include <optional>
+#include <string>
+#include <utility>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -19,6 +22,7 @@
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/materials.hpp"
+#include "scenarios/common/packing.hpp"
 #include "scenarios/common/scene_output.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/common/wall_config.hpp"
@@ -36,6 +40,7 @@ struct Setup {
   int particle = 0, wall = 0;
   double size[3] = {165, 165, 167};
   FillSpec fill;
+  HostParticles from_packing;  // fill.from: the particles to settle instead of a random insertion
   double region_height = 0, gravity = 0, damping_time = 0, settle_ratio = 0, settle_max_time = 0;
   double strain = 0, wall_speed = 0, dt = 0, max_overlap = 0.6;
   long sample_every = 100;
@@ -43,6 +48,46 @@ struct Setup {
   double experiment_force = -1, experiment_strain = -1;
   std::vector<SoftModel> models;
 };
+
+// fill.from: another tool's packing (a LAMMPS data file, the last frame of an H5MD series, or
+// a state group of an .h5 file, `fill.from_group`) settled in place of the random insertion.
+// Its positions and radii are taken relative to its box's lower corner; every particle becomes
+// compression.particle_material (density included), at rest. The file gives the particles,
+// so the keys that would draw them are refused beside it.
+void read_fill_packing(const SceneFile& s, const std::string& path, Setup& c) {
+  for (const char* key : {"fill.count", "fill.diameter_mean", "fill.diameter_spread", "fill.seed"})
+    s.require(!s.has(key), key,
+              "must not be given with fill.from (the packing file gives the particles)");
+  const std::string group = s.text("fill.from_group", "/final_state");
+  PeriodicBox file_box;
+  HostParticles h;
+  try {
+    h = read_packing_file(path, c.fill.density, file_box, group);
+  } catch (const InputError& e) {
+    s.require(false, "fill.from", e.what());
+  }
+  s.require(h.size() <= 100000000, "fill.from", "holds more than 1e8 particles");
+  double sum_d = 0;
+  for (int i = 0; i < h.size(); ++i) {
+    const double r = h.radius[i];
+    h.x[i] -= file_box.lo[0], h.y[i] -= file_box.lo[1], h.z[i] -= file_box.lo[2];
+    const bool inside = r > 0 && std::isfinite(r) && h.x[i] >= 0 && h.x[i] <= c.size[0] &&
+                        h.y[i] >= 0 && h.y[i] <= c.size[1] && h.z[i] >= 0 &&
+                        h.z[i] <= c.region_height;
+    s.require(inside, "fill.from",
+              "particle " + std::to_string(i) + " (centre " + std::to_string(h.x[i]) + ", " +
+                  std::to_string(h.y[i]) + ", " + std::to_string(h.z[i]) + " mm, radius " +
+                  std::to_string(r) +
+                  " mm) lies outside the box (box.size across, fill.region_height high) or has "
+                  "no positive radius");
+    h.density[i] = c.fill.density, h.species[i] = c.particle;
+    h.vx[i] = h.vy[i] = h.vz[i] = h.wx[i] = h.wy[i] = h.wz[i] = 0;
+    sum_d += 2 * r;
+  }
+  c.fill.count = h.size();
+  c.fill.diameter_mean = sum_d / h.size();
+  c.from_packing = std::move(h);
+}
 
 Setup read_setup(const SceneFile& s) {
   Setup c;
@@ -53,13 +98,20 @@ Setup read_setup(const SceneFile& s) {
   s.require(size.size() == 3 && size[0] > 0 && size[1] > 0 && size[2] > 0, "box.size",
             "must hold three positive lengths");
   for (int d = 0; d < 3; ++d) c.size[d] = size[d];
-  c.fill.count = s.count("fill.count", 1, kDemBytesPerParticle);
-  c.fill.diameter_mean = s.real("fill.diameter_mean");
-  c.fill.diameter_spread = s.real("fill.diameter_spread", 0.1);
-  c.fill.seed = static_cast<std::uint64_t>(s.integer("fill.seed", 1));
   c.fill.density = c.mats.materials[c.particle].density;
   c.fill.species = c.particle;
   c.region_height = s.real("fill.region_height");
+  // Read only where given, so that the summaries of poured runs (every committed reference)
+  // stay as they were.
+  const std::string from = s.has("fill.from") ? s.input_path("fill.from") : std::string();
+  if (from.empty()) {
+    c.fill.count = s.count("fill.count", 1, kDemBytesPerParticle);
+    c.fill.diameter_mean = s.real("fill.diameter_mean");
+    c.fill.diameter_spread = s.real("fill.diameter_spread", 0.1);
+    c.fill.seed = static_cast<std::uint64_t>(s.integer("fill.seed", 1));
+  } else {
+    read_fill_packing(s, from, c);
+  }
   c.gravity = s.real("fill.gravity", 9.81e-9);  // mm/us^2
   c.damping_time = s.real("fill.damping_time");
   c.settle_ratio = s.real("fill.kinetic_energy_ratio", 1e-6);
@@ -132,7 +184,7 @@ Pour pour(const Setup& c) {
   FillSpec f = c.fill;
   for (int d = 0; d < 3; ++d) f.lo[d] = 0, f.hi[d] = d == 2 ? c.region_height : c.size[d];
   Pour p;
-  p.h = fill_region(f, region_box);
+  p.h = c.from_packing.size() > 0 ? c.from_packing : fill_region(f, region_box);
   for (int i = 0; i < p.h.size(); ++i) {
     p.mean_mass += p.h.density[i] * 4.0 / 3.0 * M_PI * std::pow(p.h.radius[i], 3) / p.h.size();
     p.mean_d += 2 * p.h.radius[i] / p.h.size();
