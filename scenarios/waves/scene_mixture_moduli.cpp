@@ -142,7 +142,7 @@ Setup read_setup(const SceneFile& s) {
   // Read only where given, so that the summaries of runs without it (every committed
   // reference) stay as they were.
   if (s.has("preparation.integral_crossings"))
-    sv.integral_crossings = s.real("preparation.integral_crossings");
+    sv.integral_crossings = s.real("preparation.integral_crossings", 0.0);
   sv.max_cycles = s.small_integer("preparation.max_checks", 2000);
   sv.max_phase_steps = s.integer("preparation.max_phase_steps", 50000);
   u.probe_unconverged = s.flag("preparation.probe_unconverged", false);
@@ -170,7 +170,7 @@ Setup read_setup(const SceneFile& s) {
   u.relax_crossings = s.real("probe.relax_crossings", 2.0);
   u.keep_friction = s.flag("probe.keep_friction", false);
   // Read only where given, so that the summaries of scenes without it stay as they were.
-  if (s.has("analysis.skeleton")) u.skeleton = s.flag("analysis.skeleton");
+  if (s.has("analysis.skeleton")) u.skeleton = s.flag("analysis.skeleton", false);
   s.require(u.amplitude > 0 && u.amplitude < 1e-3, "probe.amplitude", "must lie in (0, 1e-3)");
   s.require(u.strain_crossings > 0, "probe.strain_crossings", "must be positive");
   s.require(u.relax_crossings >= 0, "probe.relax_crossings", "must not be negative");
