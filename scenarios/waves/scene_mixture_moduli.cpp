@@ -2,11 +2,12 @@
 // rubber volume fraction and the confining pressure (docs/model_mixtures_and_waves.md §2,
 // "M(P, nu_r) tables"). Per mixture: a random gas in a periodic box, compressed to jamming,
 // then driven by an isotropic pressure servo through the listed pressures in ascending order (one
-// sample, loading branch); at each pressure the relaxed state is probed like the element
-// tests of `elastic_moduli` (K from isotropic, G from pure-shear, M from uniaxial strain,
-// sliding switched off), next to K + 4G/3, the packing's bulk density and V_p = sqrt(M/rho).
-// Per mixture M ∝ P^n is fitted. The pair rule for unlike species (harmonic 2pq/(p + q) or
-// the source's pq/(p + q)) is compared on one mixture: the same packing re-probed with the
+// sample, loading branch; or, with preparation.unload_from, up to that pressure first and then
+// down through them in descending order: the unloading branch); at each pressure the relaxed state
+// is probed like the element tests of `elastic_moduli` (K from isotropic, G from pure-shear, M from
+// uniaxial strain, sliding switched off), next to K + 4G/3, the packing's bulk density and V_p =
+// sqrt(M/rho). Per mixture M ∝ P^n is fitted. The pair rule for unlike species (harmonic 2pq/(p +
+// q) or the source's pq/(p + q)) is compared on one mixture: the same packing re-probed with the
 // other rule, and a packing prepared and probed with it.
 //
 // Keys (besides [materials.*] and [contact] pair_rule, see mixture_materials.hpp):
@@ -18,6 +19,7 @@
 //                  approach_strain_rate (from phi_0 until P reaches the first pressure)
 //                  pressures = [...] (MPa)   tolerance   ekin_ratio   response_crossings
 //                  max_step   check_crossings   max_checks   max_phase_steps
+//                  unload_from (MPa, optional: the peak of the unloading branch)
 //   [damping]      gas_time (us, background damping time of the gas stages)
 //                  crossing_fraction (background damping time in crossing times, afterwards)
 //   [probe]        amplitude   strain_crossings   relax_crossings   keep_friction = false
@@ -78,6 +80,7 @@ struct Setup {
   GasSpec gas;
   double phi0 = 0.55, gas_rate = 0, gas_relax_time = 0, approach_rate = 0;
   std::vector<double> pressures;
+  double unload_from = 0;  // > 0: the unloading branch from this peak pressure (MPa)
   ServoSettings servo;
   bool probe_unconverged = false;  // probe a state the servo did not bring to its target
   double gas_damping_time = 0, damping_crossings = 0.5;
@@ -128,10 +131,24 @@ Setup read_setup(const SceneFile& s) {
             "preparation.approach_strain_rate", "must lie in (0, preparation.gas_strain_rate]");
   u.pressures = s.reals("preparation.pressures");
   s.require(!u.pressures.empty(), "preparation.pressures", "needs at least one pressure");
+  // Read only where given, so that the summaries of loading-branch runs stay as they were.
+  if (s.has("preparation.unload_from")) {
+    u.unload_from = s.real("preparation.unload_from", 0.0);
+    s.require(u.unload_from > u.pressures.front() && std::isfinite(u.unload_from),
+              "preparation.unload_from",
+              "must exceed the first (highest) of preparation.pressures: the unloading branch "
+              "starts above them");
+  }
   for (size_t k = 0; k < u.pressures.size(); ++k) {
     s.require(u.pressures[k] > 0, "preparation.pressures", "must be positive (MPa)");
-    s.require(k == 0 || u.pressures[k] > u.pressures[k - 1], "preparation.pressures",
-              "must increase (one sample is taken up through them: the loading branch)");
+    if (u.unload_from > 0)
+      s.require(k == 0 || u.pressures[k] < u.pressures[k - 1], "preparation.pressures",
+                "must decrease with preparation.unload_from (one sample is taken down "
+                "through them: the unloading branch)");
+    else
+      s.require(k == 0 || u.pressures[k] > u.pressures[k - 1], "preparation.pressures",
+                "must increase (one sample is taken up through them: the loading branch; "
+                "preparation.unload_from takes it down through decreasing ones)");
   }
   ServoSettings& sv = u.servo;
   sv.tolerance = s.real("preparation.tolerance", 0.02);
@@ -201,6 +218,8 @@ Setup read_setup(const SceneFile& s) {
       s.require(p > 0 && listed(u.pressures, p), "pair_rule_check.pressures",
                 "must be positive and listed in preparation.pressures");
     std::sort(u.check_pressures.begin(), u.check_pressures.end());
+    // In the order the branch takes them: down from the peak on the unloading branch.
+    if (u.unload_from > 0) std::reverse(u.check_pressures.begin(), u.check_pressures.end());
   }
   s.reject_unknown_keys();
 
@@ -324,9 +343,14 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
   // the first pressure (the servo takes over from there).
   strain_to_phi(*sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
   sys->step(static_cast<long>(std::ceil(u.gas_relax_time / u.params.dt)));
-  compress_to_pressure(*sys, v.pressures.front(), u.approach_rate, 20, 0.74);
+  const double peak = u.unload_from > 0 ? u.unload_from : v.pressures.front();
+  compress_to_pressure(*sys, peak, u.approach_rate, 20, 0.74);
+  // The unloading branch starts from a relaxed state at its peak pressure (not probed).
+  bool at_peak = u.unload_from > 0;
+  std::vector<double> targets = v.pressures;
+  if (at_peak) targets.insert(targets.begin(), u.unload_from);
 
-  for (double target : v.pressures) {
+  for (double target : targets) {
     // Damping scaled with the crossing time this packing will have at the target
     // (K ∝ P^{1/3} for Hertz, so t_c ∝ P^{-1/6}).
     Measurements m = sys->measure();
@@ -340,6 +364,15 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
       sys.emplace(restart_system<System>(c, model, params));
     }
     const ServoResult sr = servo_to_pressure(*sys, target, rho, u.servo);
+    if (at_peak) {
+      at_peak = false;
+      if (!sr.converged)
+        std::cerr << v.tag
+                  << ": the servo did not settle at the unloading branch's peak P = " << target
+                  << " MPa within " << u.servo.max_cycles
+                  << " checks; the branch goes down from P = " << sr.m.pressure << " MPa\n";
+      continue;
+    }
     m = sr.m;
     rho = mass / sys->box().volume();
     tc = crossing_time(m, rho, longest_edge(sys->box()));
@@ -604,9 +637,14 @@ Json choices_json(const Setup& u) {
       "off (mu = inf) unless probe.keep_friction; strain and relaxation lengths in crossing "
       "times L sqrt(rho/K_affine) of the configuration";
   ch["configurations"] =
-      "picked at target pressures on the loading branch of one sample per mixture: gas "
-      "compressed to jamming, then the isotropic pressure servo (pressure_servo.hpp) until "
-      "|P/P_target - 1| < tolerance and E_kin/E_pot < ekin_ratio";
+      u.unload_from > 0
+          ? "picked at target pressures on the unloading branch of one sample per mixture: gas "
+            "compressed to jamming and on to preparation.unload_from, settled there by the "
+            "isotropic pressure servo (pressure_servo.hpp), then taken down by it through the "
+            "decreasing targets until |P/P_target - 1| < tolerance and E_kin/E_pot < ekin_ratio"
+          : "picked at target pressures on the loading branch of one sample per mixture: gas "
+            "compressed to jamming, then the isotropic pressure servo (pressure_servo.hpp) until "
+            "|P/P_target - 1| < tolerance and E_kin/E_pot < ekin_ratio";
   ch["fit"] =
       "least squares of log M against log P over the probed configurations of each mixture "
       "(default pair rule); stderr = s / sqrt(sum (log P - mean)^2)";

@@ -3,8 +3,11 @@
 // glass packing (it must reach each target within its tolerance, on the loading branch).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <utility>
 
 #include "core/io/output.hpp"
 #include "scenarios/common/element_test.hpp"
@@ -352,5 +355,48 @@ TEST(MixtureModuliScene, SkeletonColumnsAddUpAndCountEachUnlikeContactFromBothSi
       }
     }
     std::filesystem::remove_all(out);
+  }
+}
+
+// preparation.unload_from takes each sample up to that peak, settles it there (not recorded)
+// and brings it down through decreasing pressures: each recorded state is at its own target
+// within the servo's tolerance, below the peak, and the summary names the branch. Pressures
+// that do not decrease, or a peak not above them, are refused naming the key.
+TEST(MixtureModuliScene, UnloadingBranchComesDownFromItsPeakToEachTarget) {
+  const std::string base = granular::testing::read_text(std::string(GRANULAR_SOURCE_DIR) +
+                                                        "/tests/resume/mixture_moduli.toml");
+  std::string text = base;
+  granular::testing::replace_once(text, "pressures = [0.5]\ntolerance",
+                                  "pressures = [0.5, 0.2]\nunload_from = 2.0\ntolerance");
+  const std::string out = run_small_mixture(text, "mixture_unloading");
+  const H5Reader h5(out + "/results.h5");
+  const auto target = h5.reals("/table/pressure_target"), p = h5.reals("/table/pressure");
+  const auto converged = h5.reals("/table/servo_converged");
+  ASSERT_EQ(target.size(), 5u);  // two fractions x two pressures + the pair-rule sample's one
+  for (size_t i = 0; i < target.size(); ++i) {
+    EXPECT_TRUE(target[i] == 0.5 || target[i] == 0.2) << i;  // the peak is not recorded
+    if (converged[i] == 1.0) {
+      EXPECT_NEAR(p[i] / target[i], 1.0, 0.02) << i;
+    }
+  }
+  EXPECT_GE(std::count(converged.begin(), converged.end(), 1.0), 4);
+  const std::string summary = granular::testing::read_text(out + "/summary.json");
+  EXPECT_NE(summary.find("on the unloading branch"), std::string::npos);
+  std::filesystem::remove_all(out);
+
+  const std::pair<std::string, std::string> bad[] = {
+      {"pressures = [0.2, 0.5]\nunload_from = 2.0\ntolerance", "preparation.pressures"},
+      {"pressures = [0.5, 0.2]\nunload_from = 0.4\ntolerance", "preparation.unload_from"}};
+  for (const auto& [block, key] : bad) {
+    std::string t = base;
+    granular::testing::replace_once(t, "pressures = [0.5]\ntolerance", block);
+    try {
+      const SceneFile scene = SceneFile::parse(t, "bad_unloading.toml");
+      scene.text("scene");
+      check_mixture_moduli(scene);
+      ADD_FAILURE() << key << ": the scene must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
   }
 }
