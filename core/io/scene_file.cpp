@@ -174,7 +174,13 @@ void SceneFile::offer(const std::string& key, const std::string& default_value) 
   facts_[key].has_default = true;
 }
 
-bool SceneFile::has(const std::string& key) const { return find(key) != nullptr; }
+bool SceneFile::has(const std::string& key) const {
+  // A key a driver asks about is one it knows: `granular keys` lists it even where no shipped
+  // file gives it, as optional (a reader that follows adds its kind and default).
+  const auto [at, fresh] = facts_.try_emplace(key);
+  if (fresh) at->second.default_value = "absent", at->second.has_default = true;
+  return find(key) != nullptr;
+}
 
 std::vector<std::string> SceneFile::tables(const std::string& key) const {
   std::vector<std::string> out;

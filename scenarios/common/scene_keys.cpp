@@ -131,7 +131,7 @@ std::string SceneKeys::table() const {
   for (const std::string& p : files) o << "\n  " << p;
   o << "\n\n";
   for (const auto& [key, d] : keys) {
-    o << key << "  (" << d.kind << ", "
+    o << key << "  (" << (d.kind.empty() ? std::string() : d.kind + ", ")
       << (d.required ? std::string("required") : "default " + d.default_value) << ")\n";
     if (!d.meaning.empty()) o << "    " << d.meaning << "\n";
     for (const std::string& r : d.rules) o << "    " << r << "\n";
