@@ -33,7 +33,7 @@ def slope(x, y):
     """Least-squares slope of log y against log x and its standard error (NaN with two points)."""
     lx, ly = np.log(x), np.log(y)
     a = np.vstack([lx, np.ones_like(lx)]).T
-    coef, res, _, _ = np.linalg.lstsq(a, ly, rcond=None)
+    coef = np.linalg.lstsq(a, ly, rcond=None)[0]
     n = len(x)
     if n <= 2:
         return coef[0], math.nan
@@ -98,9 +98,8 @@ def rows_of(path):
     rule = max(rules, key=rules.get)
     out = []
     for nu in sorted({float(x) for x in t["soft_fraction"]}):
-        sel = [(t["soft_fraction"][i] == nu and other[i] == rule and t["probed"][i] == 1
-                and np.isfinite(t["M"][i])) for i in range(len(t["M"]))]
-        sel = np.array(sel)
+        sel = ((t["soft_fraction"] == nu) & (other == rule) & (t["probed"] == 1)
+               & np.isfinite(t["M"]))
         if sel.sum() < 2:
             out.append((nu, int(sel.sum())) + (math.nan,) * 11)
             continue
