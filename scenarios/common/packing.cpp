@@ -180,6 +180,12 @@ HostParticles read_scene_packing(const SceneFile& scene, const std::string& from
     scene.require(density > 0 && std::isfinite(density), density_key,
                   "must be positive and finite");
   }
+  return read_scene_packing(scene, from_key, path, density, group, box);
+}
+
+HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
+                                 const std::string& path, double density, const std::string& group,
+                                 PeriodicBox& box) {
   try {
     return read_packing_file(path, density, box, group);
   } catch (const InputError& e) {

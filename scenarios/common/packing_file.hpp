@@ -1,7 +1,8 @@
 // A starting packing named by a scene key (read_packing_file), with the two scene-side rules
 // every scene that takes one shares: H5MD frames and state groups hold no density, so
 // `density_key` gives it (LAMMPS data files carry their own), and a file that cannot be read
-// is refused naming `from_key`.
+// is refused naming `from_key`. The second form takes the density from the scene's material
+// instead of a key (`density` applies to H5MD and state groups only, as above).
 #pragma once
 #include <string>
 
@@ -14,5 +15,8 @@ namespace granular {
 HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
                                  const std::string& path, const std::string& density_key,
                                  const std::string& group, PeriodicBox& box);
+HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
+                                 const std::string& path, double density, const std::string& group,
+                                 PeriodicBox& box);
 
 }  // namespace granular

@@ -23,6 +23,7 @@
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/materials.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/packing_file.hpp"
 #include "scenarios/common/scene_output.hpp"
 #include "scenarios/common/snapshot_series.hpp"
 #include "scenarios/common/wall_config.hpp"
@@ -60,12 +61,7 @@ void read_fill_packing(const SceneFile& s, const std::string& path, Setup& c) {
               "must not be given with fill.from (the packing file gives the particles)");
   const std::string group = s.text("fill.from_group", "/final_state");
   PeriodicBox file_box;
-  HostParticles h;
-  try {
-    h = read_packing_file(path, c.fill.density, file_box, group);
-  } catch (const InputError& e) {
-    s.require(false, "fill.from", e.what());
-  }
+  HostParticles h = read_scene_packing(s, "fill.from", path, c.fill.density, group, file_box);
   s.require(h.size() <= 100000000, "fill.from", "holds more than 1e8 particles");
   double sum_d = 0;
   for (int i = 0; i < h.size(); ++i) {

@@ -12,6 +12,14 @@ MixtureMaterials MixtureMaterials::read(const SceneFile& s) {
   s.require(static_cast<int>(names.size()) <= kMaxSpecies, "materials",
             "holds more materials than the " + std::to_string(kMaxSpecies) +
                 " species slots of the pair tables");
+  // Read only where given, so that the summaries of the constant law (every committed
+  // reference) stay as they were.
+  if (s.has("contact.tangential_law")) m.tangential_law = s.text("contact.tangential_law");
+  s.require(m.tangential_law == "constant" || m.tangential_law == "mindlin_modulus",
+            "contact.tangential_law",
+            "must be \"constant\" (k_t = tangential_stiffness) or \"mindlin_modulus\" "
+            "(k_t = 8 G* sqrt(R delta))");
+  const bool constant_kt = m.tangential_law == "constant";
   for (const std::string& name : names) {
     const std::string k = "materials." + name;
     MixtureMaterial mat;
@@ -35,12 +43,18 @@ MixtureMaterials MixtureMaterials::read(const SceneFile& s) {
       mat.modulus_key = "young_modulus";
     }
     mat.density = s.real(k + ".density");
-    mat.kt = s.real(k + ".tangential_stiffness");
+    if (constant_kt) {
+      mat.kt = s.real(k + ".tangential_stiffness");
+      s.require(mat.kt > 0, k + ".tangential_stiffness", "must be positive");
+    } else {
+      s.require(!s.has(k + ".tangential_stiffness"), k + ".tangential_stiffness",
+                "is not used by contact.tangential_law = \"mindlin_modulus\" (k_t = 8 G* "
+                "sqrt(R delta) from the elastic constants): remove it, or take the constant law");
+    }
     mat.viscosity = s.real(k + ".viscosity", 0.0);
     mat.tangential_viscosity = s.real(k + ".tangential_viscosity", 0.0);
     mat.friction = s.real(k + ".friction");
     s.require(mat.density > 0, k + ".density", "must be positive");
-    s.require(mat.kt > 0, k + ".tangential_stiffness", "must be positive");
     s.require(mat.viscosity >= 0, k + ".viscosity", "must not be negative");
     s.require(mat.tangential_viscosity >= 0, k + ".tangential_viscosity", "must not be negative");
     s.require(mat.friction >= 0, k + ".friction", "must not be negative");
@@ -69,6 +83,12 @@ double MixtureMaterials::effective_young(int a, int b) const {
   return 1.0 / ((1 - i.poisson * i.poisson) / i.young + (1 - j.poisson * j.poisson) / j.young);
 }
 
+double MixtureMaterials::effective_shear(int a, int b) const {
+  const MixtureMaterial &i = materials[a], &j = materials[b];
+  const double Gi = i.young / (2 * (1 + i.poisson)), Gj = j.young / (2 * (1 + j.poisson));
+  return 1.0 / ((2 - i.poisson) / Gi + (2 - j.poisson) / Gj);
+}
+
 MixtureModel MixtureMaterials::model(const std::string& rule) const {
   MixtureMaterials m = *this;
   if (!rule.empty()) m.pair_rule = rule;
@@ -83,9 +103,13 @@ MixtureModel MixtureMaterials::model(const std::string& rule) const {
       out.normal.table.p[a][b] = {4.0 / 3.0 * m.effective_young(a, b),
                                   2.0 * m.pair(a, b, i.viscosity, j.viscosity), true};
       const double mu = m.pair(a, b, i.friction, j.friction);
-      out.tangential.table.p[a][b] = {m.pair(a, b, i.kt, j.kt),
-                                      m.pair(a, b, i.tangential_viscosity, j.tangential_viscosity),
-                                      mu, mu, CoulombTangential::Constant};
+      const double gt = m.pair(a, b, i.tangential_viscosity, j.tangential_viscosity);
+      out.tangential.table.p[a][b] =
+          m.tangential_law == "constant"
+              ? CoulombTangential::Params{m.pair(a, b, i.kt, j.kt), gt, mu, mu,
+                                          CoulombTangential::Constant}
+              : CoulombTangential::Params{8 * m.effective_shear(a, b), gt, mu, mu,
+                                          CoulombTangential::MindlinReducedRadius};
     }
   return out;
 }

@@ -10,10 +10,15 @@
 // q) or the source's pq/(p + q)) is compared on one mixture: the same packing re-probed with the
 // other rule, and a packing prepared and probed with it.
 //
-// Keys (besides [materials.*] and [contact] pair_rule, see mixture_materials.hpp):
+// Keys (besides [materials.*] and [contact] pair_rule, tangential_law, see
+// mixture_materials.hpp):
 //   [mixture]      stiff_material = "glass"   soft_material = "rubber"
 //                  soft_volume_fractions = [0, 0.1, ...]
 //   [particles]    count   diameter_min   diameter_max   seed
+//                  or from (a packing file: LAMMPS data, H5MD, or an .h5 state group
+//                  from_group = "/final_state") with from_materials = ["glass", "rubber"]
+//                  (the material of the file's species 0, 1, ...): one mixture, the file's
+//                  own, instead of soft_volume_fractions (mixture_gas.hpp)
 //   [preparation]  phi_gas = 0.3   phi_0 = 0.55 (end of the fast gas compression)
 //                  gas_strain_rate (volumetric, per us)   gas_relax_time (us)
 //                  approach_strain_rate (from phi_0 until P reaches the first pressure)
@@ -44,7 +49,6 @@
 #include "core/run/ensemble.hpp"
 #include "core/run/finite.hpp"
 #include "core/run/progress.hpp"
-#include "core/run/rng.hpp"
 #include "scenarios/common/config_state.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/identity_order.hpp"
@@ -55,6 +59,7 @@
 #include "scenarios/moduli/moduli_outputs.hpp"
 #include "scenarios/moduli/study_units.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/mixture_gas.hpp"
 #include "scenarios/waves/mixture_materials.hpp"
 #include "scenarios/waves/mixture_skeleton.hpp"
 
@@ -78,6 +83,8 @@ struct Setup {
   int stiff = 0, soft = 1;
   std::vector<double> fractions;
   GasSpec gas;
+  std::optional<HostParticles> from;  // particles.from: the packing file's particles and box
+  PeriodicBox from_box;
   double phi0 = 0.55, gas_rate = 0, gas_relax_time = 0, approach_rate = 0;
   std::vector<double> pressures;
   double unload_from = 0;  // > 0: the unloading branch from this peak pressure (MPa)
@@ -104,23 +111,34 @@ Setup read_setup(const SceneFile& s) {
   u.stiff = u.mats.slot(s, "mixture.stiff_material", s.text("mixture.stiff_material"));
   u.soft = u.mats.slot(s, "mixture.soft_material", s.text("mixture.soft_material"));
   s.require(u.stiff != u.soft, "mixture.soft_material", "must differ from mixture.stiff_material");
-  u.fractions = s.reals("mixture.soft_volume_fractions");
-  s.require(!u.fractions.empty(), "mixture.soft_volume_fractions",
-            "needs at least one volume fraction");
-  for (double f : u.fractions)
-    s.require(f >= 0 && f <= 1, "mixture.soft_volume_fractions", "must lie in [0, 1]");
-
   GasSpec& g = u.gas;
-  g.count = s.count("particles.count", 16, kDemBytesPerParticle);
-  g.diameter_min = s.real("particles.diameter_min");
-  g.diameter_max = s.real("particles.diameter_max");
   g.density = 1.0;  // per particle from its material
-  g.seed = static_cast<std::uint64_t>(s.integer("particles.seed", 1));
-  g.phi = s.real("preparation.phi_gas", 0.3);
-  check_gas(s, g, "preparation.phi_gas");
+  if (s.has("particles.from")) {
+    for (const char* key :
+         {"particles.count", "particles.diameter_min", "particles.diameter_max", "particles.seed",
+          "preparation.phi_gas", "mixture.soft_volume_fractions"})
+      s.require(!s.has(key), key,
+                "must not be given with particles.from (the packing file gives the particles "
+                "and their mixture)");
+    u.from = mixture_from_file(s, u.mats, u.stiff, u.soft, u.from_box);
+    u.fractions = {soft_volume_fraction(*u.from, u.soft)};
+  } else {
+    u.fractions = s.reals("mixture.soft_volume_fractions");
+    s.require(!u.fractions.empty(), "mixture.soft_volume_fractions",
+              "needs at least one volume fraction");
+    for (double f : u.fractions)
+      s.require(f >= 0 && f <= 1, "mixture.soft_volume_fractions", "must lie in [0, 1]");
+    g.count = s.count("particles.count", 16, kDemBytesPerParticle);
+    g.diameter_min = s.real("particles.diameter_min");
+    g.diameter_max = s.real("particles.diameter_max");
+    g.seed = static_cast<std::uint64_t>(s.integer("particles.seed", 1));
+    g.phi = s.real("preparation.phi_gas", 0.3);
+    check_gas(s, g, "preparation.phi_gas");
+  }
   u.phi0 = s.real("preparation.phi_0", 0.55);
-  s.require(u.phi0 > g.phi && u.phi0 < 0.6, "preparation.phi_0",
-            "must lie between preparation.phi_gas and 0.6 (below frictional jamming)");
+  s.require(u.phi0 > (u.from ? 0.0 : g.phi) && u.phi0 < 0.6, "preparation.phi_0",
+            u.from ? "must lie in (0, 0.6) (below frictional jamming)"
+                   : "must lie between preparation.phi_gas and 0.6 (below frictional jamming)");
   u.gas_rate = s.real("preparation.gas_strain_rate");
   u.gas_relax_time = s.real("preparation.gas_relax_time");
   u.approach_rate = s.real("preparation.approach_strain_rate");
@@ -206,6 +224,8 @@ Setup read_setup(const SceneFile& s) {
 
   u.other_rule = u.mats.pair_rule == "harmonic" ? "product_over_sum" : "harmonic";
   if (s.has("pair_rule_check.soft_volume_fraction") || s.has("pair_rule_check.pressures")) {
+    s.require(!u.from, "pair_rule_check.soft_volume_fraction",
+              "needs mixture.soft_volume_fractions (not a packing file, particles.from)");
     u.check_fraction = s.real("pair_rule_check.soft_volume_fraction");
     u.check_pressures = s.reals("pair_rule_check.pressures");
     s.require(u.check_fraction > 0 && u.check_fraction < 1 && listed(u.fractions, u.check_fraction),
@@ -236,22 +256,14 @@ Setup read_setup(const SceneFile& s) {
   return u;
 }
 
-// The gas of one mixture: the same sizes and positions for every fraction (same seed), the
-// soft species given to exactly round(nu N) particles chosen by a random permutation (equal
-// size distributions, so number and volume fractions agree).
-HostParticles mixture_gas(const Setup& u, double soft_fraction, PeriodicBox& box) {
-  HostParticles h = random_gas(u.gas, box);
-  const int n = h.size();
-  std::vector<std::pair<double, int>> order(n);
-  for (int i = 0; i < n; ++i) order[i] = {Stream(u.gas.seed + 7919, i).uniform(), i};
-  std::sort(order.begin(), order.end());
-  const int soft = static_cast<int>(std::round(soft_fraction * n));
-  for (int k = 0; k < n; ++k) {
-    const int i = order[k].second;
-    h.species[i] = k < soft ? u.soft : u.stiff;
-    h.density[i] = u.mats.materials[h.species[i]].density;
+// The particles a variant starts from: the scene's gas (mixture_gas.hpp), or the packing
+// file's particles and box.
+HostParticles start_of(const Setup& u, double soft_fraction, PeriodicBox& box) {
+  if (u.from) {
+    box = u.from_box;
+    return *u.from;
   }
-  return h;
+  return mixture_gas(u.gas, u.mats, u.stiff, u.soft, soft_fraction, box);
 }
 
 double total_mass(const HostParticles& h) {
@@ -330,7 +342,7 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
   const MixtureModel other_probe = u.keep_friction ? other : without_sliding(other);
 
   PeriodicBox box;
-  const HostParticles host = mixture_gas(u, v.soft_fraction, box);
+  const HostParticles host = start_of(u, v.soft_fraction, box);
   const double mass = total_mass(host);
   double dsum = 0, vsolid = 0;
   for (int i = 0; i < host.size(); ++i)
@@ -340,7 +352,8 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
   std::optional<System> sys;
   sys.emplace(Particles<Exec>::from_host(host), box, model, gas_params(u, host));
   // Gas: fast compression to phi_0, a relaxation, then a slower one until the packing carries
-  // the first pressure (the servo takes over from there).
+  // the first pressure (the servo takes over from there). A packing file already denser than
+  // phi_0 skips the fast compression (strain_to_phi returns at once).
   strain_to_phi(*sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
   sys->step(static_cast<long>(std::ceil(u.gas_relax_time / u.params.dt)));
   const double peak = u.unload_from > 0 ? u.unload_from : v.pressures.front();
@@ -618,7 +631,16 @@ Json choices_json(const Setup& u) {
     es[a + "-" + b] = u.mats.effective_young(u.stiff, u.soft);
     es[b + "-" + b] = u.mats.effective_young(u.soft, u.soft);
   }
+  if (u.from)  // only then, so that the summaries of generated packings stay as they were
+    ch["start"] =
+        "the packing file of particles.from (its particles, box and species through "
+        "particles.from_materials, at the velocities it holds), not a generated gas";
   ch["pair_rule"] = u.mats.pair_rule;
+  // Only where the scene takes Mindlin's: a summary without it took the constant law (and
+  // the constant law's summaries, every committed reference, stay as they were).
+  if (u.mats.tangential_law != "constant")
+    ch["tangential_law"] =
+        "Mindlin: k_t = 8 G* sqrt(R delta), 1/G* = (2 - nu_i)/G_i + (2 - nu_j)/G_j";
   ch["pair_rule_scope"] =
       "k_t, gamma_n, gamma_t and mu of unlike species: harmonic 2pq/(p + q), product_over_sum "
       "pq/(p + q); like pairs keep their own values; Hertz E* always from 1/E* = sum "
@@ -730,7 +752,7 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
     for (const Variant& v : u.variants) {
       PeriodicBox box;
-      const HostParticles host = mixture_gas(u, v.soft_fraction, box);
+      const HostParticles host = start_of(u, v.soft_fraction, box);
       System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
     }
   });

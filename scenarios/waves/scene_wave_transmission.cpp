@@ -62,7 +62,12 @@ struct Prepared {
   std::string servo_note;  // then: its last held states
 };
 
+// The column's gas: drawn (fill_region), or the packing file's particles (column.from).
 HostParticles gas(const WaveSetup& w, PeriodicBox& box) {
+  if (w.from) {
+    box = w.from_box;
+    return *w.from;
+  }
   const double d = w.diameter;
   box = PeriodicBox();
   const double vol_p = M_PI / 6 * d * d * d * (1 + w.spread * w.spread);  // <d^3> of uniform
@@ -780,6 +785,14 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   summary["particles"] = h.size();
   summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
   summary["pair_rule"] = w.mats.pair_rule;
+  if (w.from) {  // only then, so that the summaries of drawn columns stay as they were
+    summary["start"] = "the packing file of column.from, walls at its particles' extent along x";
+    Json fr = Json::object();
+    for (size_t k = 0; k < w.species.size(); ++k)
+      fr[w.mats.materials[w.species[k]].name] = w.fractions[k];
+    summary["volume_fractions_of_file"] = fr;
+    summary["column_length_diameters"] = w.length;
+  }
   Json table = Json::array();
   StateTable columns;
   Json unconverged = Json::array();

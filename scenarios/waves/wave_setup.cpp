@@ -1,14 +1,18 @@
 #include "scenarios/waves/wave_setup.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
+
+#include "scenarios/common/packing_file.hpp"
 
 namespace granular {
 
 WaveSetup read_wave_setup(const SceneFile& s) {
   WaveSetup w;
   w.mats = MaterialSet::read(s);
-  w.fractions = s.reals("mixture.volume_fractions");
+  const bool from = s.has("column.from");
+  if (!from) w.fractions = s.reals("mixture.volume_fractions");
   // The scene reader holds lists of numbers only: the materials are one comma-separated text.
   const std::string list = s.text("mixture.materials");
   size_t pos = 0;
@@ -24,14 +28,16 @@ WaveSetup read_wave_setup(const SceneFile& s) {
     w.species.push_back(it->second);
     pos = end + 1;
   }
-  s.require(w.species.size() == w.fractions.size(), "mixture.volume_fractions",
-            "needs one fraction per material of mixture.materials");
-  double sum = 0;
-  for (double f : w.fractions) {
-    s.require(f >= 0, "mixture.volume_fractions", "must not be negative");
-    sum += f;
+  if (!from) {
+    s.require(w.species.size() == w.fractions.size(), "mixture.volume_fractions",
+              "needs one fraction per material of mixture.materials");
+    double sum = 0;
+    for (double f : w.fractions) {
+      s.require(f >= 0, "mixture.volume_fractions", "must not be negative");
+      sum += f;
+    }
+    s.require(std::abs(sum - 1) < 1e-9, "mixture.volume_fractions", "must sum to 1");
   }
-  s.require(std::abs(sum - 1) < 1e-9, "mixture.volume_fractions", "must sum to 1");
   for (int sp : w.species)
     s.require(w.mats.materials[sp].density > 0 && !w.mats.materials[sp].rigid(),
               "mixture.materials", "must name deformable materials with a positive density");
@@ -39,18 +45,22 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.mats.materials[w.wall].friction == 0, "mixture.wall_material",
             "must be frictionless (friction = 0): wall contacts start fresh in every run");
 
-  w.length = s.real("column.length");
-  w.width = s.real("column.width");
-  w.diameter = s.real("column.diameter");
-  w.spread = s.real("column.spread", 0.05);
-  w.gas_phi = s.real("column.gas_volume_fraction", 0.35);
-  w.seed = s.integer("column.seed", 1);
-  s.require(w.length >= 4, "column.length", "must be at least 4 diameters");
-  s.require(w.width >= 3, "column.width", "must be at least 3 diameters (periodic images)");
-  s.require(w.diameter > 0, "column.diameter", "must be positive");
-  s.require(w.spread >= 0 && w.spread < 0.5, "column.spread", "must lie in [0, 0.5)");
-  s.require(w.gas_phi > 0.05 && w.gas_phi < 0.45, "column.gas_volume_fraction",
-            "must lie in (0.05, 0.45)");
+  if (from) {
+    column_from_file(s, w);
+  } else {
+    w.length = s.real("column.length");
+    w.width = s.real("column.width");
+    w.diameter = s.real("column.diameter");
+    w.spread = s.real("column.spread", 0.05);
+    w.gas_phi = s.real("column.gas_volume_fraction", 0.35);
+    w.seed = s.integer("column.seed", 1);
+    s.require(w.length >= 4, "column.length", "must be at least 4 diameters");
+    s.require(w.width >= 3, "column.width", "must be at least 3 diameters (periodic images)");
+    s.require(w.diameter > 0, "column.diameter", "must be positive");
+    s.require(w.spread >= 0 && w.spread < 0.5, "column.spread", "must lie in [0, 0.5)");
+    s.require(w.gas_phi > 0.05 && w.gas_phi < 0.45, "column.gas_volume_fraction",
+              "must lie in (0.05, 0.45)");
+  }
 
   w.pressures = s.reals("preparation.pressures");
   s.require(!w.pressures.empty(), "preparation.pressures", "needs at least one pressure");
@@ -71,8 +81,12 @@ WaveSetup read_wave_setup(const SceneFile& s) {
             "must be \"skip\" or \"stop\"");
   w.stop_unconverged = unconverged == "stop";
   s.require(w.final_relax_time > 0, "preparation.final_relax_time", "must be positive");
-  s.require(w.gas_end_phi > w.gas_phi && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
-            "must lie between column.gas_volume_fraction and 0.64");
+  if (from)  // a file already denser than gas_end_phi skips the gas compression
+    s.require(w.gas_end_phi > 0 && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
+              "must lie in (0, 0.64)");
+  else
+    s.require(w.gas_end_phi > w.gas_phi && w.gas_end_phi < 0.64, "preparation.gas_end_phi",
+              "must lie between column.gas_volume_fraction and 0.64");
   s.require(w.max_push > 0 && w.max_push < 0.05, "preparation.max_push", "must lie in (0, 0.05)");
   s.require(w.prep_friction >= 0, "preparation.friction", "must not be negative");
   s.require(w.wall_speed > 0, "preparation.wall_speed", "must be positive");
@@ -168,6 +182,55 @@ double pulse_displacement(const WaveSetup& w, double a, double t) {
   }
   if (tau >= T) return a * 0.5 * T;
   return a * (0.5 * tau - T / (4 * M_PI) * std::sin(2 * M_PI * tau / T));
+}
+
+void column_from_file(const SceneFile& s, WaveSetup& w) {
+  for (const char* key :
+       {"mixture.volume_fractions", "column.length", "column.width", "column.diameter",
+        "column.spread", "column.gas_volume_fraction", "column.seed"})
+    s.require(!s.has(key), key,
+              "must not be given with column.from (the packing file gives the particles, "
+              "their sizes, box and mixture)");
+  const std::string path = s.input_path("column.from");
+  const std::string group = s.text("column.from_group", "/final_state");
+  PeriodicBox file_box;
+  // The materials give the densities: 1 stands in for the density H5MD and state groups lack.
+  HostParticles h = read_scene_packing(s, "column.from", path, 1.0, group, file_box);
+  s.require(h.size() >= 16, "column.from", "holds fewer than 16 particles");
+  const int kinds = static_cast<int>(w.species.size());
+  double lo = INFINITY, hi = -INFINITY, dsum = 0, volume = 0;
+  std::vector<double> by_species(kinds, 0.0);
+  for (int i = 0; i < h.size(); ++i) {
+    const int k = h.species[i];
+    const double r = h.radius[i];
+    s.require(k >= 0 && k < kinds, "mixture.materials",
+              "names " + std::to_string(kinds) + " material(s), but particle " + std::to_string(i) +
+                  " of " + path + " is of species " + std::to_string(k));
+    s.require(r > 0 && std::isfinite(r) && std::isfinite(h.x[i]), "column.from",
+              "particle " + std::to_string(i) + " has no positive radius or no position");
+    h.species[i] = w.species[k];
+    h.density[i] = w.mats.materials[w.species[k]].density;
+    lo = std::min(lo, h.x[i] - r), hi = std::max(hi, h.x[i] + r);
+    dsum += 2 * r;
+    volume += r * r * r, by_species[k] += r * r * r;
+  }
+  w.diameter = dsum / h.size();
+  PeriodicBox& box = w.from_box;
+  box = PeriodicBox();
+  box.len[0] = hi - lo, box.len[1] = file_box.len[1], box.len[2] = file_box.len[2];
+  for (int d = 0; d < 3; ++d) box.lo[d] = 0, box.periodic[d] = d != 0;
+  for (int i = 0; i < h.size(); ++i)
+    h.x[i] -= lo, h.y[i] -= file_box.lo[1], h.z[i] -= file_box.lo[2];
+  w.length = box.len[0] / w.diameter;
+  w.width = std::min(box.len[1], box.len[2]) / w.diameter;
+  s.require(w.width >= 3, "column.from",
+            "has a box narrower than 3 mean diameters across y or z (periodic images)");
+  s.require(w.length >= 4, "column.from",
+            "spans fewer than 4 mean diameters along x (the wave's direction)");
+  w.fractions.clear();
+  for (double v : by_species) w.fractions.push_back(v / volume);
+  w.gas_phi = M_PI / 6 * volume * 8 / (box.len[0] * box.len[1] * box.len[2]);
+  w.from = std::move(h);
 }
 
 }  // namespace granular

@@ -10,11 +10,13 @@
 #include <utility>
 
 #include "core/io/output.hpp"
+#include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
 #include "scenarios/scene_registry.hpp"
+#include "scenarios/waves/mixture_gas.hpp"
 #include "scenarios/waves/mixture_materials.hpp"
 #include "tests/test_support.hpp"
 
@@ -98,6 +100,36 @@ TEST(MixtureMaterials, ModulusReadingIsExplicitAndExclusive) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("materials.rubber.shear_modulus"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("both.toml"), std::string::npos);
+  }
+}
+
+TEST(MixtureMaterials, MindlinLawTakesItsSpringFromTheElasticConstantsNotAConstant) {
+  // contact.tangential_law = "mindlin_modulus": k_t = 8 G* sqrt(R delta) with
+  // 1/G* = (2 - nu_i)/G_i + (2 - nu_j)/G_j (G = 29000 and 200 MPa, nu = 0.3 and 0.5).
+  std::string text = std::string(kMaterials);
+  granular::testing::replace_once(text, "tangential_stiffness = 1.0e4\n", "");
+  granular::testing::replace_once(text, "tangential_stiffness = 150.0\n", "");
+  const MixtureMaterials m = MixtureMaterials::read(
+      SceneFile::parse(text + "[contact]\ntangential_law = \"mindlin_modulus\"\n", "mindlin.toml"));
+  const MixtureModel model = m.model();
+  const auto& t = model.tangential.table;
+  EXPECT_NEAR(t(0, 0).kt, 8 * 29000.0 / 3.4, 1e-9);
+  EXPECT_NEAR(t(0, 1).kt, 1058.3941605839, 1e-8);  // whatever the pair rule: G* mixes
+  EXPECT_EQ(t(0, 1).kt, m.model("product_over_sum").tangential.table(0, 1).kt);
+  EXPECT_NEAR(t(1, 1).kt, 8 * 200.0 / 3.0, 1e-11);
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) EXPECT_EQ(t(a, b).law, CoulombTangential::MindlinReducedRadius);
+  // The constant law stays the default, and a constant stiffness beside Mindlin is refused.
+  EXPECT_EQ(read_materials("harmonic").model().tangential.table(0, 1).law,
+            CoulombTangential::Constant);
+  try {
+    MixtureMaterials::read(SceneFile::parse(
+        std::string(kMaterials) + "[contact]\ntangential_law = \"mindlin_modulus\"\n",
+        "both.toml"));
+    ADD_FAILURE() << "tangential_stiffness beside the Mindlin law must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("materials.glass.tangential_stiffness"),
+              std::string::npos);
   }
 }
 
@@ -399,4 +431,74 @@ TEST(MixtureModuliScene, UnloadingBranchComesDownFromItsPeakToEachTarget) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   }
+}
+
+// particles.from: a packing file that holds the very gas the scene would draw itself (written
+// as a state group, species 0 glass and 1 rubber) runs bitwise as the generated sample does;
+// the file's mixture is reported as its exact soft volume fraction. Keys that would draw the
+// particles, and species the materials list does not name, are refused naming the key.
+TEST(MixtureModuliScene, PackingFileHoldingTheScenesOwnGasRunsBitwiseAsTheGeneratedOne) {
+  std::string base = granular::testing::read_text(std::string(GRANULAR_SOURCE_DIR) +
+                                                  "/tests/resume/mixture_moduli.toml");
+  granular::testing::replace_once(base, "soft_volume_fractions = [0.0, 0.5]",
+                                  "soft_volume_fractions = [0.5]");
+  granular::testing::replace_once(base, "[pair_rule_check]\nsoft_volume_fraction = 0.5\n", "");
+  granular::testing::replace_once(base, "pressures = [0.5]\n\n[run]", "\n[run]");
+  const std::string generated = run_small_mixture(base, "mixture_generated");
+
+  // The scene's gas: 32 beads of 3.8-4.2 mm, seed 1, phi_gas 0.3, half of them rubber.
+  GasSpec gas;
+  gas.count = 32, gas.diameter_min = 3.8, gas.diameter_max = 4.2, gas.seed = 1, gas.phi = 0.3;
+  const MixtureMaterials mats = read_materials("harmonic");
+  PeriodicBox box;
+  const HostParticles h = mixture_gas(gas, mats, 0, 1, 0.5, box);
+  const std::string dir = granular::testing::temp_dir("mixture_packing");
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/gas.h5";
+  {
+    H5Writer w(file);
+    write_state(w, "/final_state", Particles<Kokkos::DefaultExecutionSpace>::from_host(h), box,
+                1.0);
+    w.commit();
+  }
+  std::string text = base;
+  granular::testing::replace_once(text, "soft_volume_fractions = [0.5]\n", "");
+  granular::testing::replace_once(text, "phi_gas = 0.3\n", "");
+  granular::testing::replace_once(
+      text, "count = 32\ndiameter_min = 3.8\ndiameter_max = 4.2\nseed = 1\n",
+      "from = \"" + file + "\"\nfrom_materials = [\"glass\", \"rubber\"]\n");
+  const std::string from_file = run_small_mixture(text, "mixture_from_file");
+
+  const H5Reader a(generated + "/results.h5"), b(from_file + "/results.h5");
+  for (const char* column :
+       {"pressure", "phi", "z_mean", "K", "G", "M", "servo_steps", "rho_bulk", "max_overlap"}) {
+    const auto x = a.reals(std::string("/table/") + column);
+    const auto y = b.reals(std::string("/table/") + column);
+    ASSERT_EQ(x.size(), 1u) << column;
+    ASSERT_EQ(y.size(), 1u) << column;
+    EXPECT_EQ(x[0], y[0]) << column;  // bitwise
+  }
+  EXPECT_GT(b.reals("/table/M")[0], 0.0);
+  EXPECT_EQ(a.reals("/table/soft_fraction")[0], 0.5);
+  EXPECT_EQ(b.reals("/table/soft_fraction")[0], soft_volume_fraction(h, 1));
+  EXPECT_NEAR(soft_volume_fraction(h, 1), 0.5, 0.1);
+  std::filesystem::remove_all(generated);
+  std::filesystem::remove_all(from_file);
+
+  const std::pair<std::string, std::string> bad[] = {
+      {"from_materials = [\"glass\"]", "particles.from_materials"},  // rubber beads unnamed
+      {"from_materials = [\"glass\", \"rubber\"]\nseed = 2", "particles.seed"}};
+  for (const auto& [block, key] : bad) {
+    std::string t = text;
+    granular::testing::replace_once(t, "from_materials = [\"glass\", \"rubber\"]", block);
+    try {
+      const SceneFile scene = SceneFile::parse(t, "bad_packing.toml");
+      scene.text("scene");
+      check_mixture_moduli(scene);
+      ADD_FAILURE() << key << ": the scene must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }

@@ -12,8 +12,11 @@
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
 #include "granular_config.hpp"
+#include "scenarios/common/dem_output.hpp"
+#include "scenarios/common/packing.hpp"
 #include "scenarios/scene_registry.hpp"
 #include "scenarios/waves/skeleton.hpp"
+#include "scenarios/waves/wave_setup.hpp"
 #include "tests/test_support.hpp"
 
 using namespace granular;
@@ -166,4 +169,86 @@ TEST(WaveTransmissionScene, TargetTheServoDoesNotReachIsListedAndNotAnalysed) {
   }
   EXPECT_FALSE(std::filesystem::exists(opts.out_dir + "/summary.json"));
   std::filesystem::remove_all(opts.out_dir);
+}
+
+// column.from: another tool's packing (here a periodic gas written as a state group, species 0
+// and 1) fills the column: species k becomes the k-th material of mixture.materials with its
+// density, the walls stand at the particles' extent along x (no particle starts in a wall),
+// y and z keep the file's periodic width, and the volume fractions, mean diameter and length
+// come from the file. A run from it prepares exactly the file's particles. Keys that would
+// draw the column, and a species without a material, are refused naming the key.
+TEST(WaveTransmissionScene, PackingFileFillsTheColumnBetweenWallsAtItsExtent) {
+  GasSpec gas;
+  gas.count = 200, gas.diameter_min = 3.8, gas.diameter_max = 4.2, gas.phi = 0.3, gas.seed = 5;
+  PeriodicBox file_box;
+  HostParticles h = random_gas(gas, file_box);
+  for (int i = 0; i < h.size(); ++i) h.species[i] = i % 3 == 0 ? 1 : 0;  // a third rubber
+  const std::string dir = temp_dir("wave_packing");
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/gas.h5";
+  {
+    H5Writer w(file);
+    write_state(w, "/final_state", Particles<Kokkos::DefaultExecutionSpace>::from_host(h), file_box,
+                1.0);
+    w.commit();
+  }
+  std::string text = shipped_scene("wave_transmission_mixture_quick.toml");
+  replace_once(text, "volume_fractions = [0.8, 0.2]\n", "");
+  replace_once(text,
+               "length = 16.0\nwidth = 4.0\ndiameter = 4.0\nspread = 0.05\n"
+               "gas_volume_fraction = 0.35\nseed = 1\n",
+               "from = \"" + file + "\"\n");
+  replace_once(text, "max_time = 200000.0", "max_time = 3000.0");
+  const WaveSetup w = read_wave_setup(SceneFile::parse(text, "from_file.toml"));
+  ASSERT_TRUE(w.from.has_value());
+  const HostParticles& c = *w.from;
+  ASSERT_EQ(c.size(), h.size());
+  double lo = INFINITY, hi = -INFINITY, v = 0, v_rubber = 0, dsum = 0;
+  const int glass = w.mats.slot.at("glass"), rubber = w.mats.slot.at("rubber");
+  for (int i = 0; i < c.size(); ++i) {
+    const double r = c.radius[i];
+    lo = std::min(lo, c.x[i] - r), hi = std::max(hi, c.x[i] + r);
+    EXPECT_EQ(c.species[i], h.species[i] == 1 ? rubber : glass) << i;
+    EXPECT_EQ(c.density[i], h.species[i] == 1 ? 1270.0 : 2540.0) << i;
+    v += r * r * r, dsum += 2 * r;
+    if (h.species[i] == 1) v_rubber += r * r * r;
+  }
+  EXPECT_NEAR(lo, 0.0, 1e-12);
+  EXPECT_NEAR(hi, w.from_box.len[0], 1e-12);
+  EXPECT_FALSE(w.from_box.periodic[0]);
+  EXPECT_EQ(w.from_box.len[1], file_box.len[1]);
+  EXPECT_EQ(w.from_box.len[2], file_box.len[2]);
+  ASSERT_EQ(w.fractions.size(), 2u);
+  EXPECT_NEAR(w.fractions[1], v_rubber / v, 1e-14);
+  EXPECT_NEAR(w.fractions[0] + w.fractions[1], 1.0, 1e-14);
+  EXPECT_NEAR(w.diameter, dsum / c.size(), 1e-12);
+
+  // A short run (the servo stops at max_time; the state is listed, not analysed): the file's
+  // particles and mixture are the run's.
+  RunOptions opts;
+  opts.out_dir = temp_dir("wave_from_file");
+  opts.progress = false, opts.charts = false;
+  SceneFile scene = SceneFile::parse(text, "from_file.toml");
+  (void)scene.text("scene");
+  run_wave_transmission(scene, opts);
+  const std::string js = slurp(opts.out_dir + "/summary.json");
+  EXPECT_EQ(json_number(js, "particles", ""), 200.0);
+  EXPECT_NEAR(json_number(js, "rubber", "\"volume_fractions_of_file\""), v_rubber / v, 1e-12);
+  std::filesystem::remove_all(opts.out_dir);
+
+  const std::pair<std::string, std::string> bad[] = {
+      {"materials = \"glass\"", "mixture.materials"},  // the rubber beads have no material
+      {"from = \"" + file + "\"\nseed = 2", "column.seed"}};
+  const std::string firsts[] = {"materials = \"glass, rubber\"", "from = \"" + file + "\""};
+  for (int k = 0; k < 2; ++k) {
+    std::string t = text;
+    replace_once(t, firsts[k], bad[k].first);
+    try {
+      read_wave_setup(SceneFile::parse(t, "bad_from.toml"));
+      ADD_FAILURE() << bad[k].second << ": must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad[k].second), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
