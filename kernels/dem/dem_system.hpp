@@ -122,6 +122,33 @@ class DemSystem {
     forces(0.0);  // initial forces: no spring increment for a step not taken
   }
 
+  // A system that continues the saved one `s` (saved(), or read_restart of
+  // scenarios/common/restart_file.hpp) bitwise, made from it alone: without the neighbour
+  // build and force pass a fresh system makes, whose results restore() would replace (the
+  // saved list, histories, forces and clock are the state). `origin` names the state in the
+  // errors. A saved state with walls is refused here: make that system fresh, set its walls,
+  // then restore().
+  struct Saved;
+  DemSystem(const Saved& s, const Model& model, const DemParams& params, const std::string& origin)
+      : p_(s.particles), box_(s.box), model_(model), params_(params), nl_(params.skin) {
+    if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
+    if (s.wall_history.extent(0) > 0 || s.wall_record.extent(0) > 0)
+      throw InputError(origin + " holds walls: restore it into a system with the same walls");
+    {
+      auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
+      for (int i = 0; i < static_cast<int>(radius.extent(0)); ++i) {
+        a_min_ = std::min(a_min_, radius(i));
+        a_max_ = std::max(a_max_, radius(i));
+      }
+    }
+    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
+    nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
+    nl_.keep_mirror(false);
+    nl_.keep_pair_index(two_pass());
+    restore(s, origin);
+    check_time_step();
+  }
+
   // Move-only: the members are Kokkos Views, which copy as shared references, so a copy
   // would silently step the same particles and histories as the original.
   DemSystem(const DemSystem&) = delete;
@@ -672,6 +699,11 @@ class DemSystem {
             << " (t_c/50 = " << tc / 50 << " is the usual choice)";
       else
         msg << params_.dt_hint;
+      // A law whose stiffness grows with the overlap is taken at the overlap limit.
+      if (model_.stiffness(0.25 * delta_ref, length_max) < model_.stiffness(delta_ref, length_max))
+        msg << "; the stiffness is taken at the overlap limit max_overlap = " << params_.max_overlap
+            << " of the smaller radius (a lower limit, where the run's overlaps stay below it, "
+               "bounds it lower)";
       throw PhysicsError(msg.str());
     }
     // Explicit dashpots: a rate gamma/m with gamma dt / m above 1 flips the relative velocity

@@ -171,6 +171,13 @@ HostParticles read_packing_file(const std::string& path, double density, Periodi
 
 namespace granular {
 
+void refuse_beside_packing(const SceneFile& scene, const std::vector<std::string>& keys,
+                           const std::string& from_key, const std::string& gives) {
+  for (const std::string& key : keys)
+    scene.require(!scene.has(key), key,
+                  "must not be given with " + from_key + " (the packing file gives " + gives + ")");
+}
+
 HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
                                  const std::string& path, const std::string& density_key,
                                  const std::string& group, PeriodicBox& box) {

@@ -5,6 +5,7 @@
 // instead of a key (`density` applies to H5MD and state groups only, as above).
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/dem/box.hpp"
 #include "core/dem/host_particles.hpp"
@@ -15,6 +16,11 @@ namespace granular {
 HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
                                  const std::string& path, const std::string& density_key,
                                  const std::string& group, PeriodicBox& box);
+// Refuses each of `keys` (the ones that would draw the particles) where the scene gives a
+// packing file under `from_key`, saying what the file gives instead (`gives`).
+void refuse_beside_packing(const SceneFile& scene, const std::vector<std::string>& keys,
+                           const std::string& from_key, const std::string& gives);
+
 HostParticles read_scene_packing(const SceneFile& scene, const std::string& from_key,
                                  const std::string& path, double density, const std::string& group,
                                  PeriodicBox& box);

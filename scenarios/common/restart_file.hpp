@@ -1,7 +1,9 @@
 // Exact restarts in HDF5: the one place where a system's saved state (DemSystem::Saved, with
 // its neighbour list's and contact history's) meets a file. The kernel classes hand out and
 // take back their state as Views; this writes them bit for bit and reads them back into a
-// Saved state without a system, which the system then restores (checking every index).
+// Saved state without a system, from which a system is made (DemSystem's constructor from a
+// Saved state, no neighbour build first) or which a system with walls restores (checking
+// every index either way).
 //
 // Layout of a restart group g (docs/data_formats.md, checkpoints):
 //   g/particles/{x,v,w,f,torque,radius,mass,inertia,species,id}
@@ -15,7 +17,6 @@
 #include <string>
 #include <vector>
 
-#include "core/dem/host_particles.hpp"
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
 #include "kernels/dem/contact_history.hpp"
@@ -159,14 +160,6 @@ typename System::Saved read_restart(const H5Reader& in, const std::string& g) {
 template <class System>
 void load_restart(const H5Reader& in, const std::string& g, System& sys) {
   sys.restore(read_restart<System>(in, g), restart_origin(g));
-}
-
-// A saved state's particles on the host in identity order (row k holds identity k), each of
-// `density`: what a resumed run makes its system from before restoring the exact state (the
-// restore replaces every array, so the masses' last bits do not matter here).
-template <class P>
-HostParticles host_by_identity(const P& p, double density) {
-  return host_particles(gather_by_identity(p), [density](int) { return density; });
 }
 
 }  // namespace granular

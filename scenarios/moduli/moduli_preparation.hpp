@@ -168,11 +168,11 @@ bool prepare(const Setup& s, size_t variant, const Model& model, Outputs& out, P
       if (!std::filesystem::exists(ck.restart(k)))
         throw InputError(ck.pointer() + ": the checkpoint predates exact restarts (no " +
                          ck.restart(k) + "); run without --resume");
-      sys.emplace(restart_system<System>(read_config(ck.state(k)),
-                                         k < relaxed_stage ? gas_model : model, s.params));
+      // The saved state alone makes the system (no build nor force pass first).
       const H5Reader restart(ck.restart(k));
       try {
-        load_restart(restart, "/restart", *sys);
+        sys.emplace(read_restart<System>(restart, "/restart"),
+                    k < relaxed_stage ? gas_model : model, s.params, restart_origin("/restart"));
       } catch (const InputError& e) {
         throw InputError("--resume: " + ck.restart(k) + ": " + e.what() + "; run without --resume");
       }

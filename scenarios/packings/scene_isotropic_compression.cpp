@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
-#include <optional>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -194,36 +193,27 @@ IsoSetup read_setup(const SceneFile& scene) {
 // The run's system: made from the checkpoint's restart group (and its series so far) when the
 // run resumes, else from the gas or the packing read.
 System make_system(const IsoSetup& s, bool resume, const std::string& checkpoint, Series& series) {
-  PeriodicBox box;
-  HostParticles host;
-  std::optional<System::Saved> saved;
-  if (resume) {
+  if (resume) {  // the saved state alone makes the system (no build nor force pass first)
     H5Reader in(checkpoint);
     if (!in.has("/restart"))
       throw InputError("--resume: " + checkpoint + " predates exact restarts; run afresh");
     try {
-      saved = read_restart<System>(in, "/restart");
-      host = host_by_identity(saved->particles, s.gas.density);
+      const System::Saved saved = read_restart<System>(in, "/restart");
+      series.read(in, "/series");
+      std::cerr << "resuming from " << checkpoint << " at step " << saved.steps << "\n";
+      return System(saved, s.model(), s.params, restart_origin("/restart"));
     } catch (const InputError& e) {
       throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
     }
-    box = saved->box;
-    series.read(in, "/series");
-    std::cerr << "resuming from " << checkpoint << " at step " << saved->steps << "\n";
-  } else if (s.from.empty()) {
+  }
+  PeriodicBox box;
+  HostParticles host;
+  if (s.from.empty()) {
     host = random_gas(s.gas, box);
   } else {
     host = s.start, box = s.start_box;
   }
-  System sys(Particles<Exec>::from_host(host), box, s.model(), s.params);
-  if (saved) {
-    try {
-      sys.restore(*saved, restart_origin("/restart"));
-    } catch (const InputError& e) {
-      throw InputError("--resume: " + checkpoint + ": " + e.what() + "; run afresh");
-    }
-  }
-  return sys;
+  return System(Particles<Exec>::from_host(host), box, s.model(), s.params);
 }
 
 // Compresses at the volumetric rate to phi_end, then relaxes at constant volume, sampling the

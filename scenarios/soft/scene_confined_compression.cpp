@@ -56,9 +56,9 @@ struct Setup {
 // compression.particle_material (density included), at rest. The file gives the particles,
 // so the keys that would draw them are refused beside it.
 void read_fill_packing(const SceneFile& s, const std::string& path, Setup& c) {
-  for (const char* key : {"fill.count", "fill.diameter_mean", "fill.diameter_spread", "fill.seed"})
-    s.require(!s.has(key), key,
-              "must not be given with fill.from (the packing file gives the particles)");
+  refuse_beside_packing(s,
+                        {"fill.count", "fill.diameter_mean", "fill.diameter_spread", "fill.seed"},
+                        "fill.from", "the particles");
   const std::string group = s.text("fill.from_group", "/final_state");
   PeriodicBox file_box;
   HostParticles h = read_scene_packing(s, "fill.from", path, c.fill.density, group, file_box);

@@ -53,6 +53,7 @@
 #include "scenarios/common/element_test.hpp"
 #include "scenarios/common/identity_order.hpp"
 #include "scenarios/common/packing.hpp"
+#include "scenarios/common/packing_file.hpp"
 #include "scenarios/common/power_law_fit.hpp"
 #include "scenarios/common/pressure_servo.hpp"
 #include "scenarios/common/scene_output.hpp"
@@ -114,12 +115,11 @@ Setup read_setup(const SceneFile& s) {
   GasSpec& g = u.gas;
   g.density = 1.0;  // per particle from its material
   if (s.has("particles.from")) {
-    for (const char* key :
-         {"particles.count", "particles.diameter_min", "particles.diameter_max", "particles.seed",
-          "preparation.phi_gas", "mixture.soft_volume_fractions"})
-      s.require(!s.has(key), key,
-                "must not be given with particles.from (the packing file gives the particles "
-                "and their mixture)");
+    refuse_beside_packing(
+        s,
+        {"particles.count", "particles.diameter_min", "particles.diameter_max", "particles.seed",
+         "preparation.phi_gas", "mixture.soft_volume_fractions"},
+        "particles.from", "the particles and their mixture");
     u.from = mixture_from_file(s, u.mats, u.stiff, u.soft, u.from_box);
     u.fractions = {soft_volume_fraction(*u.from, u.soft)};
   } else {

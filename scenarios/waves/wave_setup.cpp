@@ -185,12 +185,11 @@ double pulse_displacement(const WaveSetup& w, double a, double t) {
 }
 
 void column_from_file(const SceneFile& s, WaveSetup& w) {
-  for (const char* key :
-       {"mixture.volume_fractions", "column.length", "column.width", "column.diameter",
-        "column.spread", "column.gas_volume_fraction", "column.seed"})
-    s.require(!s.has(key), key,
-              "must not be given with column.from (the packing file gives the particles, "
-              "their sizes, box and mixture)");
+  refuse_beside_packing(
+      s,
+      {"mixture.volume_fractions", "column.length", "column.width", "column.diameter",
+       "column.spread", "column.gas_volume_fraction", "column.seed"},
+      "column.from", "the particles, their sizes, box and mixture");
   const std::string path = s.input_path("column.from");
   const std::string group = s.text("column.from_group", "/final_state");
   PeriodicBox file_box;
