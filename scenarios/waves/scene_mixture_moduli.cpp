@@ -390,7 +390,11 @@ void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress&
     rho = mass / sys->box().volume();
     tc = crossing_time(m, rho, longest_edge(sys->box()));
     const ConfigState c = snapshot(*sys, host.density, m.pressure);
-    const bool jammed = is_jammed(m) && std::isfinite(tc);
+    // A state the servo brought to rest at its target carries that pressure: it is jammed
+    // whatever share of its beads rattle (soft beads much smaller than the stiff ones sit in
+    // its pores by the thousand; is_jammed's count, at most half the particles rattling, is
+    // meant for one size).
+    const bool jammed = (is_jammed(m) || (sr.converged && m.z_corrected > 0)) && std::isfinite(tc);
     // A state the servo left short of its target, or still moving, is not the state asked
     // for: its moduli are not measured (NaN) and it is left out of the fits, unless the scene
     // asks for it to be probed as it is.

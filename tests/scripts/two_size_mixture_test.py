@@ -2,7 +2,10 @@
 """scripts/two_size_mixture.py: the gas it writes has the asked soft volume fraction and the
 solid volume of --solid-beads stiff beads, diameters within their ranges, no two beads
 overlapping (brute force over periodic images), and `mixture_moduli` reads it as its packing
-(`granular check` with particles.from on a scene that names the file).
+(`granular check` with particles.from on a scene that names the file). Then a run of
+`mixture_moduli` on glass with a tenth of its volume in rubber beads a quarter its size: most
+rubber beads rattle in the glass pores (over half of all beads), yet the state the servo
+brings to rest at its pressure is jammed and probed (M > 0), not reported as a gas.
 
     two_size_mixture_test.py GRANULAR"""
 import math
@@ -62,6 +65,26 @@ def main():
         toml.write_text(scene)
         p = subprocess.run([granular, "check", str(toml)], capture_output=True, text=True)
         check(p.returncode == 0, f"granular check: {p.stdout}{p.stderr}")
+
+        small = Path(tmp) / "small_rubber.h5"
+        subprocess.run([sys.executable, str(SCRIPT), str(small), "--soft-fraction", "0.1",
+                        "--soft-diameter", "0.95", "1.05", "--solid-beads", "120"], check=True,
+                       capture_output=True)
+        text = scene.replace(str(out), str(small))
+        text = text.replace("pressures = [0.1, 0.5, 2.0]", "pressures = [0.5]")
+        text = text.replace("ekin_ratio = 1.0e-3", "ekin_ratio = 3.0e-3")
+        toml.write_text(text)
+        run_dir = Path(tmp) / "run"
+        p = subprocess.run([granular, "run", str(toml), "--out", str(run_dir), "--threads", "1",
+                            "--quiet"], capture_output=True, text=True)
+        check(p.returncode == 0, f"granular run: {p.stdout}{p.stderr}")
+        with h5py.File(run_dir / "results.h5", "r") as f:
+            t = {k: f["table"][k][()] for k in ("servo_converged", "rattler_fraction", "jammed",
+                                                  "probed", "M")}
+        check(t["servo_converged"][0] == 1, "the servo brings the two-size packing to rest")
+        check(t["rattler_fraction"][0] > 0.5, f"most beads rattle ({t['rattler_fraction'][0]})")
+        check(t["jammed"][0] == 1 and t["probed"][0] == 1, "a state at its pressure is jammed")
+        check(t["M"][0] > 0, f"and probed (M = {t['M'][0]})")
     print("two_size_mixture: OK")
 
 
