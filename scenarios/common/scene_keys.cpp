@@ -102,6 +102,17 @@ SceneKeys scene_keys(const std::string& scene) {
       if (c != comments.end() && k.meaning.empty()) k.meaning = c->second;
     }
   }
+  // A key that only a check names (never read for these files nor asked about, and no table
+  // of keys: check_gas names <table>.initial_speed for every scene that draws a gas, the
+  // impact scenes name the target's keys a wall target does not read) is not required by
+  // them: listed as "default absent", as the keys a driver only asks about.
+  for (auto& [key, doc] : out.keys) {
+    const std::string prefix = key + ".";
+    const auto next = out.keys.upper_bound(key);
+    const bool table = next != out.keys.end() && next->first.compare(0, prefix.size(), prefix) == 0;
+    if (doc.kind.empty() && doc.required && !table)
+      doc.required = false, doc.default_value = "absent";
+  }
   return out;
 }
 

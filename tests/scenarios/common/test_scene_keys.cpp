@@ -58,6 +58,21 @@ TEST(SceneKeys, ListsEveryKeyOfTheShippedFilesWithKindDefaultRulesAndMeaning) {
   EXPECT_NE(json.find("\"particles.count\""), std::string::npos);
 }
 
+// A key that only a shared check names, and that this driver neither reads nor asks about
+// (mixture_moduli draws its gas through check_gas, which names particles.initial_speed), is
+// not required: it is listed as "default absent", while the keys the driver reads keep their
+// own facts, and a table of keys ([materials]) stays required.
+TEST(SceneKeys, KeyOnlyACheckNamesIsListedAsDefaultAbsentNotRequired) {
+  const auto k = scene_keys("mixture_moduli");
+  const auto& speed = k.keys.at("particles.initial_speed");
+  EXPECT_TRUE(speed.kind.empty());
+  EXPECT_FALSE(speed.required);
+  EXPECT_EQ(speed.default_value, "absent");
+  EXPECT_TRUE(k.keys.at("particles.count").required);
+  EXPECT_EQ(k.keys.at("particles.count").kind, "integer");
+  EXPECT_TRUE(k.keys.at("materials").required);
+}
+
 TEST(SceneKeys, AnUnknownSceneIsRefusedListingTheKnownOnes) {
   try {
     scene_keys("isotropic_compresion");
