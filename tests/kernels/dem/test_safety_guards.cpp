@@ -54,6 +54,29 @@ TEST(SafetyGuards, TimeStepAboveTenthOfShortestContactIsRefusedWithTheLimit) {
     FAIL() << "time step above t_c/10 accepted";
   } catch (const PhysicsError& e) {
     EXPECT_NE(std::string(e.what()).find("set dt <="), std::string::npos) << e.what();
+    // A linear spring's stiffness does not depend on the overlap: no overlap limit named.
+    EXPECT_EQ(std::string(e.what()).find("max_overlap"), std::string::npos) << e.what();
+  }
+}
+
+// A Hertz contact stiffens with the overlap, and the guard takes it at the overlap limit: the
+// refusal names that limit, so a user whose overlaps stay far below it knows a lower
+// run.max_overlap also relaxes the bound (docs/guide_waves.md, the Mindlin mixtures).
+TEST(SafetyGuards, OverlapDependentStiffnessNamesTheOverlapLimitItIsTakenAt) {
+  PeriodicBox box;
+  const HostParticles h = small_gas(box, 0.0);
+  const ContactModel<HertzNormal> model{
+      {PairTable<HertzNormal::Params>::uniform({1e5, 0, true})}, {}, {}};
+  DemParams prm;
+  prm.skin = 0.2;
+  prm.dt = 10.0;  // far above any contact duration here
+  prm.max_overlap = 0.25;
+  try {
+    DemSystem<Exec, ContactModel<HertzNormal>> sys(Particles<Exec>::from_host(h), box, model, prm);
+    FAIL() << "time step above t_c/10 accepted";
+  } catch (const PhysicsError& e) {
+    EXPECT_NE(std::string(e.what()).find("overlap limit max_overlap = 0.25"), std::string::npos)
+        << e.what();
   }
 }
 
