@@ -228,7 +228,6 @@ void column_from_file(const SceneFile& s, WaveSetup& w) {
             "spans fewer than 4 mean diameters along x (the wave's direction)");
   w.fractions.clear();
   for (double v : by_species) w.fractions.push_back(v / volume);
-  w.gas_phi = M_PI / 6 * volume * 8 / (box.len[0] * box.len[1] * box.len[2]);
   w.from = std::move(h);
 }
 
