@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "granular_config.hpp"
+#include "scenarios/common/key_units.hpp"
 
 namespace granular {
 
@@ -112,6 +113,8 @@ SceneKeys scene_keys(const std::string& scene) {
     const bool table = next != out.keys.end() && next->first.compare(0, prefix.size(), prefix) == 0;
     if (doc.kind.empty() && doc.required && !table)
       doc.required = false, doc.default_value = "absent";
+    const auto units = key_units_of(out.scene, key);
+    if (!units.empty()) doc.unit = units.front()->unit, doc.unit_note = units.front()->note;
   }
   return out;
 }
@@ -125,6 +128,8 @@ Json SceneKeys::json() const {
     e["kind"] = d.kind;
     e["required"] = d.required;
     e["default"] = d.required ? Json() : Json(d.default_value);
+    e["unit"] = d.unit.empty() ? Json() : Json(d.unit);
+    e["unit_note"] = d.unit_note.empty() ? Json() : Json(d.unit_note);
     e["rules"] = rules;
     e["example"] = d.example.empty() ? Json() : Json(d.example);
     e["meaning"] = d.meaning;
@@ -144,6 +149,12 @@ std::string SceneKeys::table() const {
   for (const auto& [key, d] : keys) {
     o << key << "  (" << (d.kind.empty() ? std::string() : d.kind + ", ")
       << (d.required ? std::string("required") : "default " + d.default_value) << ")\n";
+    if (!d.unit.empty())
+      o << "    unit: " << d.unit
+        << (!d.unit_note.empty() ? " (" + d.unit_note + ")"
+            : d.unit == "1"      ? std::string(" (a pure number)")
+                                 : "")
+        << "\n";
     if (!d.meaning.empty()) o << "    " << d.meaning << "\n";
     for (const std::string& r : d.rules) o << "    " << r << "\n";
     if (!d.example.empty()) o << "    e.g. " << d.example << "\n";

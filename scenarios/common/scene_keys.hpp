@@ -1,8 +1,9 @@
 // `granular keys <scene>`: every key a scene driver reads, learned by checking the shipped
 // scene files of that driver (or a given file) in check mode: its kind, its default (or that
 // it is required), the rules the driver checks on it, an example value and the comment the
-// shipped file writes beside it. Keys a driver reads only for choices no shipped file makes
-// are not listed (a driver reads the keys of the contact law a file picks, not of all).
+// shipped file writes beside it, and the unit of every numeric key (key_units.hpp). Keys a
+// driver reads only for choices no shipped file makes are not listed (a driver reads the keys
+// of the contact law a file picks, not of all).
 #pragma once
 #include <map>
 #include <string>
@@ -18,6 +19,7 @@ std::vector<std::string> shipped_scene_files(const std::string& name);
 
 struct KeyDoc {
   std::string kind, default_value, example, meaning;
+  std::string unit, unit_note;  // numeric keys: the declared unit, and its scale where it has one
   bool required = true;
   std::vector<std::string> rules;
 };
@@ -25,7 +27,8 @@ struct SceneKeys {
   std::string scene;
   std::vector<std::string> files;
   std::map<std::string, KeyDoc> keys;
-  // {"scene", "files", "keys": {key: {kind, required, default, rules, example, meaning}}}
+  // {"scene", "files", "keys": {key: {kind, required, default, unit, unit_note, rules, example,
+  // meaning}}}
   Json json() const;
   std::string table() const;  // for a terminal
 };
