@@ -48,6 +48,7 @@ inline XdmfFrame state_frame(const std::string& group, int n) {
               {"angular_velocity", true, false},
               {"species", false, true},
               {"id", false, true}};
+  f.box = true;
   return f;
 }
 

@@ -141,6 +141,7 @@ std::string snapshot_xdmf(const std::string& h5_name, const std::vector<long>& s
                 {"species", false, true},          {"id", false, true}};
     f.nwalls = walls[k];
     f.wall_dataset = f.group + "/walls/quads";
+    f.box = true;
     f.timed = true, f.time = times[k];
   }
   return xdmf_text(h5_name, frames, true);

@@ -44,6 +44,12 @@ std::string xdmf_text(const std::string& h5_name, const std::vector<XdmfFrame>& 
            f.group + "/" + a.name);
       x << "</Attribute>\n";
     }
+    if (f.box)
+      for (const char* b : {"box_lo", "box_len"}) {
+        x << ind << " <Attribute Name=\"" << b << "\" AttributeType=\"Vector\" Center=\"Grid\">";
+        item("1 3", "Float", 8, f.group + "/" + b);
+        x << "</Attribute>\n";
+      }
     x << ind << "</Grid>\n";
     if (with_walls) {
       x << ind << "<Grid Name=\"walls\" GridType=\"Uniform\">\n";

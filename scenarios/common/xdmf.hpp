@@ -13,7 +13,7 @@ struct XdmfField {
   bool integer = false;  // 4-byte integers, else doubles
 };
 
-// One frame: datasets `group`/position (n x 3) and `group`/<field> for each field, and the
+// One frame: datasets `group`/position (n x 3) and `group`/<field> for each field, the box, and the
 // walls as quadrilaterals (each the quad where its plane cuts the box) read from
 // `wall_dataset` (4 nwalls corners x 3) where nwalls > 0.
 struct XdmfFrame {
@@ -23,6 +23,9 @@ struct XdmfFrame {
   std::vector<XdmfField> fields;
   int nwalls = 0;
   std::string wall_dataset;
+  // The periodic box of the frame (it deforms over a run): `group`/box_lo and `group`/box_len
+  // (3 values each) as grid-centred attributes, which ParaView shows as the grid's field data.
+  bool box = false;
   bool timed = false;  // a series' frame carries its time
   double time = 0;
 };

@@ -2,7 +2,8 @@
 // collection with one frame per due sample, the right point count in every frame and every
 // HDF5 item it references present with matching dimensions; an impact on a wall adds the
 // wall as a quad to each frame; an unfinished series leaves no file. When ParaView's
-// `pvpython` is installed, its own XDMF reader loads the series.
+// `pvpython` is installed, its own XDMF reader loads the series and reads back the engine's
+// values and box.
 #include <gtest/gtest.h>
 
 #include <Kokkos_Core.hpp>
@@ -104,8 +105,8 @@ std::vector<Frame> check_series(const std::string& dir, const std::string& name,
       EXPECT_EQ(h5.reals(path).size(), count) << path;
     }
   }
-  // Per frame: position and six attributes (+ the wall quads).
-  EXPECT_EQ(items, frames.size() * (7 + (nwalls > 0 ? 1 : 0)));
+  // Per frame: position, six attributes and the box (lo, len) (+ the wall quads).
+  EXPECT_EQ(items, frames.size() * (9 + (nwalls > 0 ? 1 : 0)));
   for (size_t k = 1; k < frames.size(); ++k) {
     EXPECT_GT(frames[k].step, frames[k - 1].step);
     EXPECT_GT(frames[k].time, frames[k - 1].time);
@@ -242,8 +243,10 @@ TEST(SnapshotSeries, EarlierSeriesXdmfIsRemovedBeforeTheNewSeriesIsCommitted) {
 }
 
 // ParaView's own XDMF reader (pvpython or pvbatch from Debian's ParaView) loads the series: as many
-// time steps as frames, the particle count and every field in each.
-TEST_F(SnapshotSeriesTest, ParaViewReadsTheSeries) {
+// time steps as frames, the particle count and every field in each, and the values it reads
+// (positions, velocities, radii, and each frame's box as the grid's field data) are the
+// engine's to the last bit.
+TEST_F(SnapshotSeriesTest, ParaViewReadsTheSeriesWithItsBoxAndTheEnginesValues) {
   // pvpython, or pvbatch (Debian 12's paraview ships only pvbatch): the same interpreter.
   std::string pvpython = granular::testing::find_program("pvpython");
   if (pvpython.empty()) pvpython = granular::testing::find_program("pvbatch");
@@ -251,10 +254,11 @@ TEST_F(SnapshotSeriesTest, ParaViewReadsTheSeries) {
     GTEST_SKIP() << "neither pvpython nor pvbatch is installed (Debian packages `paraview`, "
                     "`python3-paraview`): series not opened in ParaView";
   const auto frames = check_series(dir_, "snapshots", kParticles, 0);
-  const std::string script = dir_ + "/load_series.py", log = dir_ + "/pvpython.txt";
+  const std::string script = dir_ + "/load_series.py", log = dir_ + "/pvpython.txt",
+                    values = dir_ + "/pvpython_values.txt";
   std::ofstream(script) << R"(import sys
 from paraview import simple, servermanager
-path, frames, points = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+path, frames, points, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 try:
     reader = simple.Xdmf3ReaderS(FileName=[path])
 except AttributeError:
@@ -262,24 +266,58 @@ except AttributeError:
 times = list(reader.TimestepValues)
 assert len(times) == frames, "time steps %d, frames %d" % (len(times), frames)
 fields = ["radius", "velocity", "angular_velocity", "force", "species", "id"]
-for t in times:
-    reader.UpdatePipeline(t)
-    data = servermanager.Fetch(reader)
-    if data.IsA("vtkMultiBlockDataSet"):
-        data = data.GetBlock(0)
-    assert data.GetNumberOfPoints() == points, "t %g: %d points" % (t, data.GetNumberOfPoints())
-    for f in fields:
-        a = data.GetPointData().GetArray(f)
-        assert a is not None and a.GetNumberOfTuples() == points, "t %g: field %s" % (t, f)
+with open(out, "w") as o:
+    for t in times:
+        reader.UpdatePipeline(t)
+        data = servermanager.Fetch(reader)
+        if data.IsA("vtkMultiBlockDataSet"):
+            data = data.GetBlock(0)
+        n = data.GetNumberOfPoints()
+        assert n == points, "t %g: %d points" % (t, n)
+        for f in fields:
+            a = data.GetPointData().GetArray(f)
+            assert a is not None and a.GetNumberOfTuples() == points, "t %g: field %s" % (t, f)
+        # repr: the shortest text that reads back as the same double
+        row = lambda name, vals: o.write(name + " " + " ".join(repr(float(v)) for v in vals) + "\n")
+        for b in ("box_lo", "box_len"):
+            a = data.GetFieldData().GetArray(b)
+            assert a is not None, "t %g: no field data %s" % (t, b)
+            row(b, [a.GetValue(c) for c in range(a.GetNumberOfValues())])
+        row("position", [c for i in range(n) for c in data.GetPoint(i)])
+        for f in ("velocity", "radius"):
+            a = data.GetPointData().GetArray(f)
+            row(f, [a.GetValue(c) for c in range(a.GetNumberOfValues())])
 print("series ok: %d time steps" % len(times))
 )";
   const int rc = granular::testing::run_program(
       {pvpython, "--force-offscreen-rendering", script, dir_ + "/snapshots.xdmf",
-       std::to_string(frames.size()), std::to_string(kParticles)},
+       std::to_string(frames.size()), std::to_string(kParticles), values},
       log);
   const std::string out = read_text(log);
   if (out.find("No module named 'paraview'") != std::string::npos)
     GTEST_SKIP() << pvpython << " has no paraview module (Debian package `python3-paraview`)";
-  EXPECT_EQ(rc, 0) << out;
+  ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("series ok"), std::string::npos) << out;
+  // What ParaView read, frame by frame, against the series' HDF5 file.
+  H5Reader h5(dir_ + "/snapshots.h5");
+  std::istringstream read(read_text(values));
+  std::string line;
+  size_t lines = 0;
+  for (const Frame& f : frames)
+    for (const char* name : {"box_lo", "box_len", "position", "velocity", "radius"}) {
+      ASSERT_TRUE(std::getline(read, line)) << "ParaView's values end before frame " << f.step;
+      ++lines;
+      std::istringstream fields(line);
+      std::string got_name;
+      fields >> got_name;
+      ASSERT_EQ(got_name, name);
+      std::vector<double> got;
+      for (std::string v; fields >> v;) got.push_back(std::stod(v));
+      EXPECT_EQ(got, h5.reals(snapshot_group(f.step) + "/" + name))
+          << name << " of step " << f.step << " as ParaView reads it";
+    }
+  EXPECT_EQ(lines, frames.size() * 5);
+  // The box deforms over the compression: the frames do not all show the same box.
+  EXPECT_NE(h5.reals(snapshot_group(frames.front().step) + "/box_len"),
+            h5.reals(snapshot_group(frames.back().step) + "/box_len"));
 }

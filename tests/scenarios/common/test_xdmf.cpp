@@ -67,8 +67,10 @@ TEST(Xdmf, StateAloneAndWithWallsNamesEveryDatasetItReads) {
   EXPECT_EQ(alone.find("Temporal"), std::string::npos);
   EXPECT_EQ(alone.find("Quadrilateral"), std::string::npos);
   EXPECT_NE(alone.find("<Grid Name=\"particles\" GridType=\"Uniform\">"), std::string::npos);
-  // position and the five fields write_state stores
-  EXPECT_EQ(check_items(alone, dir + "/state.h5", "state.h5"), 6u);
+  // position, the five fields write_state stores and the box (lo, len)
+  EXPECT_EQ(check_items(alone, dir + "/state.h5", "state.h5"), 8u);
+  EXPECT_NE(alone.find("<Attribute Name=\"box_len\" AttributeType=\"Vector\" Center=\"Grid\">"),
+            std::string::npos);
 
   XdmfFrame framed = state_frame("/state", n);
   framed.name = "scene", framed.nwalls = 2, framed.wall_dataset = "/walls/quads";
@@ -77,6 +79,6 @@ TEST(Xdmf, StateAloneAndWithWallsNamesEveryDatasetItReads) {
   EXPECT_NE(scene.find("<Grid Name=\"scene\" GridType=\"Collection\" CollectionType=\"Spatial\">"),
             std::string::npos);
   EXPECT_NE(scene.find("TopologyType=\"Quadrilateral\" NumberOfElements=\"2\""), std::string::npos);
-  EXPECT_EQ(check_items(scene, dir + "/state.h5", "state.h5"), 7u);
+  EXPECT_EQ(check_items(scene, dir + "/state.h5", "state.h5"), 9u);
   std::filesystem::remove_all(dir);
 }
