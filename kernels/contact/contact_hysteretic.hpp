@@ -18,17 +18,12 @@ struct HystereticNormal {
   };
   PairTable<Params> table;
 
-  // Elastic-plastic part. Moves the history dmax (delta_max) as the contact loads further
-  // or slides along the adhesive branch; callers that only look pass a copy.
+  // Elastic-plastic part (hysteretic_elastic_force of kernels/contact/lane_law.inc, the one
+  // source the host's four-lane paths share). Moves the history dmax (delta_max) as the
+  // contact loads further or slides along the adhesive branch; callers that only look pass a
+  // copy.
   KOKKOS_INLINE_FUNCTION static double piecewise(const Params& q, double delta, double& dmax) {
-    if (delta > dmax) dmax = delta;  // virgin loading
-    const double d0 = (1.0 - q.k1 / q.k2) * dmax;
-    const double f2 = q.k2 * (delta - d0);
-    if (f2 >= q.k1 * delta) return q.k1 * delta;
-    if (f2 > -q.kc * delta) return f2;
-    // On the adhesive branch: move delta_max so that k2 (delta - delta0) = -kc delta here.
-    dmax = (q.k2 + q.kc) / (q.k2 - q.k1) * delta;
-    return -q.kc * delta;
+    return hysteretic_elastic_force(q.k1, q.k2, q.kc, delta, dmax);
   }
   KOKKOS_INLINE_FUNCTION double force(const PairState& s, double* h) const {
     const Params& q = table(s.si, s.sj);

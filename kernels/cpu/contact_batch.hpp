@@ -1,8 +1,9 @@
 // Contacts evaluated in batches, four per instruction, for the host one-pass force kernel
-// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs), for three laws (BatchLaw): the
+// (kernels/dem/contact_forces.hpp, compute_forces_by_slabs), for four laws (BatchLaw): the
 // linear law of the frictional peer benchmark and the linear element tests (spring-dashpot with
 // the constant Coulomb spring), the restitution-damped Hertz-Mindlin law (waves, impacts, the
-// Hertz peer benchmark) and the visco-elastic Hertz law (Hertz moduli, mixtures); no rolling.
+// Hertz peer benchmark), the visco-elastic Hertz law (Hertz moduli, mixtures) and the
+// hysteretic law with the constant Coulomb spring (the cohesive studies); no rolling.
 //
 // A slab's rows are read in order; the touching contacts of whole rows are gathered into a
 // batch (structure of arrays), the batch is evaluated four contacts at a time in AVX
@@ -39,8 +40,13 @@ namespace granular {
 // studies' law: kernels/contact/contact_hertz_restitution.hpp, CoulombTangential::
 // MindlinRestitution), which also reads the particles' masses; and the visco-elastic Hertz law
 // (kernels/contact/contact_hertz.hpp) with the constant or an L-delta Mindlin spring, in the
-// form (BatchForm) that every pair shares.
-enum class BatchLaw { Linear, HertzRestitution, Hertz };
+// form (BatchForm) that every pair shares; and the hysteretic law (kernels/contact/
+// contact_hysteretic.hpp) with the constant Coulomb spring, whose history holds delta_max
+// ahead of the spring.
+enum class BatchLaw { Linear, HertzRestitution, Hertz, Hysteretic };
+// Where the spring sits in a contact's history row, and the row's length.
+constexpr int batch_spring_at(BatchLaw L) { return L == BatchLaw::Hysteretic ? 1 : 0; }
+constexpr int batch_history(BatchLaw L) { return batch_spring_at(L) + 3; }
 
 // The visco-elastic Hertz law's form, one for every pair: the normal force's length (R* or
 // a_i + a_j) and the tangential spring's law (Constant, MindlinPairDiameter or
@@ -50,18 +56,20 @@ struct BatchForm {
   int tangential = CoulombTangential::Constant;
 };
 
-// A pair's parameters in the batch's six slots: the normal law's two (linear: k_n, gamma_n;
-// Hertz: K, alpha) and the tangential spring's four (k_t, gamma_t or their coefficients, mu_s,
-// mu_d).
+// A pair's parameters in the batch's slots: the normal law's two (linear: k_n, gamma_n;
+// Hertz: K, alpha; hysteretic: k2, gamma_n), the tangential spring's four (k_t, gamma_t or
+// their coefficients, mu_s, mu_d), and the hysteretic law's loading and adhesive stiffnesses.
 struct BatchParams {
   double kn = 0, gn = 0, kt = 0, gt = 0, mus = 0, mud = 0;
+  double k1 = 0, kc = 0;  // BatchLaw::Hysteretic only
 };
 
 namespace contact_batch_detail {
 inline bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 inline bool same_bits(const BatchParams& a, const BatchParams& b) {
   return same_bits(a.kn, b.kn) && same_bits(a.gn, b.gn) && same_bits(a.kt, b.kt) &&
-         same_bits(a.gt, b.gt) && same_bits(a.mus, b.mus) && same_bits(a.mud, b.mud);
+         same_bits(a.gt, b.gt) && same_bits(a.mus, b.mus) && same_bits(a.mud, b.mud) &&
+         same_bits(a.k1, b.k1) && same_bits(a.kc, b.kc);
 }
 // Whether every pair's tangential spring follows `law`.
 inline bool every_tangential_law(const CoulombTangential& t, int law) {
@@ -171,6 +179,26 @@ struct ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>> {
   }
 };
 
+template <>
+struct ContactBatchLaw<ContactModel<HystereticNormal, CoulombTangential>> {
+  using Model = ContactModel<HystereticNormal, CoulombTangential>;
+  static constexpr bool available = GRANULAR_CONTACT_BATCH;
+  static constexpr BatchLaw law = BatchLaw::Hysteretic;
+  static bool usable(const Model& m) {
+    return !m.coulomb_elastic_normal &&
+           contact_batch_detail::every_tangential_law(m.tangential, CoulombTangential::Constant);
+  }
+  static BatchParams pair(const Model& m, int a, int b) {
+    const HystereticNormal::Params& n = m.normal.table.p[a][b];
+    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
+    return {n.k2, n.gn, t.kt, t.gt, t.mu_s, t.mu_d, n.k1, n.kc};
+  }
+  static bool uniform(const Model& m) {
+    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
+  }
+  static BatchForm form(const Model&) { return {}; }
+};
+
 #if GRANULAR_CONTACT_BATCH
 
 // The law parts of kernels/contact/lane_law.inc, for four AVX lanes.
@@ -209,8 +237,10 @@ struct ContactBatch {
   alignas(32) double wj0[kCap + kW], wj1[kCap + kW], wj2[kCap + kW];
   alignas(32) double kn[kCap + kW], gn[kCap + kW], kt[kCap + kW], gt[kCap + kW];
   alignas(32) double mus[kCap + kW], mud[kCap + kW];
-  // Spring (in: stored, out: advanced) and outputs: force on i, torques on i and j.
-  alignas(32) double h0[kCap + kW], h1[kCap + kW], h2[kCap + kW];
+  alignas(32) double k1[kCap + kW], kc[kCap + kW];  // BatchLaw::Hysteretic only
+  // Spring (in: stored, out: advanced), the hysteretic law's delta_max (in and out), and
+  // outputs: force on i, torques on i and j.
+  alignas(32) double h0[kCap + kW], h1[kCap + kW], h2[kCap + kW], hd[kCap + kW];
   alignas(32) double f0[kCap + kW], f1[kCap + kW], f2[kCap + kW];
   alignas(32) double q0[kCap + kW], q1[kCap + kW], q2[kCap + kW];
   alignas(32) double p0[kCap + kW], p1[kCap + kW], p2[kCap + kW];
@@ -259,9 +289,25 @@ struct ContactBatch {
     wj0[c] = bj.w[0], wj1[c] = bj.w[1], wj2[c] = bj.w[2];
     h0[c] = h[0], h1[c] = h[1], h2[c] = h[2];
   }
+  // Slot c's motion and stored history, for the law L: h is the contact's history row
+  // (delta_max ahead of the spring for the hysteretic law).
+  template <BatchLaw L, class Body>
+  GRANULAR_ALWAYS_INLINE void set_contact(int c, const Body& bi, const Body& bj, const double r3[3],
+                                          const double* h) {
+    set_motion<L == BatchLaw::HertzRestitution>(c, bi, bj, r3, h + batch_spring_at(L));
+    if constexpr (L == BatchLaw::Hysteretic) hd[c] = h[0];
+  }
+  // Slot c's advanced history into the contact's history row h.
+  template <BatchLaw L>
+  GRANULAR_ALWAYS_INLINE void store_history(int c, double* h) const {
+    constexpr int at = batch_spring_at(L);
+    if constexpr (L == BatchLaw::Hysteretic) h[0] = hd[c];
+    h[at] = h0[c], h[at + 1] = h1[c], h[at + 2] = h2[c];
+  }
   // Slot c's pair parameters (unless uniform).
   GRANULAR_ALWAYS_INLINE void set_params(int c, const BatchParams& p) {
     kn[c] = p.kn, gn[c] = p.gn, kt[c] = p.kt, gt[c] = p.gt, mus[c] = p.mus, mud[c] = p.mud;
+    k1[c] = p.k1, kc[c] = p.kc;
   }
 
   // Appends the touching contact of bi (the owner) with bj (partner j, history row k) at
@@ -280,8 +326,8 @@ struct ContactBatch {
   // Pads the last vector with copies of the last contact (evaluated, never scattered).
   void pad() {
     if (n == 0) return;
-    double* arrays[] = {rx,  ry,  rz,  dv0, dv1, dv2, ai, aj,  mi,  mj, wi0, wi1, wi2,
-                        wj0, wj1, wj2, kn,  gn,  kt,  gt, mus, mud, h0, h1,  h2};
+    double* arrays[] = {rx,  ry,  rz, dv0, dv1, dv2, ai,  aj,  mi, mj, wi0, wi1, wi2, wj0,
+                        wj1, wj2, kn, gn,  kt,  gt,  mus, mud, k1, kc, h0,  h1,  h2,  hd};
     for (double* a : arrays)
       for (int c = n; c < (n + kW - 1) / kW * kW; ++c) a[c] = a[n - 1];
   }
@@ -307,15 +353,18 @@ struct ContactBatch {
   struct Lanes {
     V X, Y, Z, ai, aj, d0, d1, d2, wi0, wi1, wi2, wj0, wj1, wj2, s0, s1, s2;
     V mi, mj;                              // masses (read by the Hertz law only)
+    V D;                                   // delta_max (the hysteretic law's, in and out)
     V F0, F1, F2, q0, q1, q2, p0, p1, p2;  // force on i, torques on i and j
     V Fn, N0, N1, N2, Dl;                  // normal force, normal and overlap
     V C0, C1;                              // the normal law's corrections (Corrected)
   };
   struct LaneParams {
     V kn, gn, kt, gt, mus, mud;
+    V k1, kc;  // BatchLaw::Hysteretic only
   };
   GRANULAR_AVX_INLINE static LaneParams splat(const BatchParams& p) {
-    return {splat(p.kn), splat(p.gn), splat(p.kt), splat(p.gt), splat(p.mus), splat(p.mud)};
+    return {splat(p.kn),  splat(p.gn),  splat(p.kt), splat(p.gt),
+            splat(p.mus), splat(p.mud), splat(p.k1), splat(p.kc)};
   }
 
   template <BatchLaw L, bool Uniform, bool Frame, bool Corrected>
@@ -330,12 +379,16 @@ struct ContactBatch {
       l.wi0 = load(wi0 + c), l.wi1 = load(wi1 + c), l.wi2 = load(wi2 + c);
       l.wj0 = load(wj0 + c), l.wj1 = load(wj1 + c), l.wj2 = load(wj2 + c);
       l.s0 = load(h0 + c), l.s1 = load(h1 + c), l.s2 = load(h2 + c);
+      // (k1 and kc are read by the hysteretic law only: the other laws' loads go unused.)
       const LaneParams p{par<Uniform>(kn + c, u.kn),   par<Uniform>(gn + c, u.gn),
                          par<Uniform>(kt + c, u.kt),   par<Uniform>(gt + c, u.gt),
-                         par<Uniform>(mus + c, u.mus), par<Uniform>(mud + c, u.mud)};
+                         par<Uniform>(mus + c, u.mus), par<Uniform>(mud + c, u.mud),
+                         par<Uniform>(k1 + c, u.k1),   par<Uniform>(kc + c, u.kc)};
+      if constexpr (L == BatchLaw::Hysteretic) l.D = load(hd + c);
       if constexpr (Corrected) l.C0 = load(c0 + c), l.C1 = load(c1 + c);
       law<L, Corrected>(l, p, vdt, form);
       store(h0 + c, l.s0), store(h1 + c, l.s1), store(h2 + c, l.s2);
+      if constexpr (L == BatchLaw::Hysteretic) store(hd + c, l.D);
       store(q0 + c, l.q0), store(q1 + c, l.q1), store(q2 + c, l.q2);
       store(p0 + c, l.p0), store(p1 + c, l.p1), store(p2 + c, l.p2);
       store(f0 + c, l.F0), store(f1 + c, l.F1), store(f2 + c, l.F2);
@@ -383,6 +436,8 @@ struct ContactBatch {
       fn = hertz_force(p.kn, p.gn, normal_r ? reduced : diameter, dn, -vn);
       if (form.tangential != CoulombTangential::Constant)
         scale = lane_sqrt((spring_r ? reduced : diameter) * delta);
+    } else if constexpr (L == BatchLaw::Hysteretic) {
+      fn = hysteretic_elastic_force(p.k1, p.kn, p.kc, dn, l.D) + p.gn * -vn;
     } else {
       fn = linear_normal_force(p.kn, p.gn, dn, -vn);
     }

@@ -1,5 +1,5 @@
 // The near list as one flat stream of contacts per slab, for the host one-pass force kernel
-// with the batched frictional laws (linear, and the Hertz-Mindlin laws) and
+// with the batched frictional laws (linear, the Hertz-Mindlin laws, hysteretic) and
 // with the frictionless linear law (kernels/dem/contact_forces.hpp,
 // kernels/cpu/contact_batch.hpp).
 //
@@ -68,7 +68,8 @@ struct NearStream {
   }
 };
 
-// Whether 3 * index stays an int for every history row and particle (the loads' offsets).
+// Whether 3 * index stays an int for every history row and particle (the loads' offsets; the
+// hysteretic law's rows of four are offset in long).
 inline bool near_stream_indexable(long rows, long particles) {
   return 3 * rows < 2147483647L && 3 * particles < 2147483647L;
 }
@@ -192,6 +193,21 @@ GRANULAR_AVX2_INLINE void load_packed(const double* pack, int at, const int* idx
   C = (V)_mm256_permute2f128_pd(t0, t2, 0x31);
   D = (V)_mm256_permute2f128_pd(t1, t3, 0x31);
 }
+// The 4-vectors base[4 k .. 4 k + 3] of the four history rows k = idx[0..3] (the hysteretic
+// law's delta_max and spring), as four vectors of four lanes: four 32-byte loads and a 4 x 4
+// transpose, as load_packed.
+GRANULAR_AVX2_INLINE void load4(const double* base, const int* idx, V& A, V& B, V& C, V& D) {
+  const __m256d r0 = _mm256_loadu_pd(base + 4L * idx[0]);
+  const __m256d r1 = _mm256_loadu_pd(base + 4L * idx[1]);
+  const __m256d r2 = _mm256_loadu_pd(base + 4L * idx[2]);
+  const __m256d r3 = _mm256_loadu_pd(base + 4L * idx[3]);
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+  A = (V)_mm256_permute2f128_pd(t0, t2, 0x20);
+  B = (V)_mm256_permute2f128_pd(t1, t3, 0x20);
+  C = (V)_mm256_permute2f128_pd(t0, t2, 0x31);
+  D = (V)_mm256_permute2f128_pd(t1, t3, 0x31);
+}
 // base[k] of the four indices k = idx[0..3].
 GRANULAR_AVX2_INLINE V load1(const double* base, const int* idx) {
   const __m128d a01 = _mm_loadh_pd(_mm_load_sd(base + idx[0]), base + idx[1]);
@@ -265,7 +281,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
                                     const double* pack) {
   using namespace near_stream_detail;
   using CB = ContactBatch;
-  constexpr int H = 3;
+  constexpr int H = batch_history(L), O = batch_spring_at(L);  // the row, and its spring
   constexpr long S = ParticlePack::kStride;
   constexpr int kAhead = 16;     // entries
   for (int z = z0; z < z1; ++z)  // a row's empty sum: +0 (see the head of this file)
@@ -290,6 +306,7 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
   // The law's outputs (force on the owner, torques on owner and partner, spring) of the
   // four lanes: the (x, y) pair of lane l at xy[o] + pair_at(l), its z at z4[o][l].
   alignas(32) double xy[4][2 * CB::kW], z4[4][CB::kW];
+  alignas(32) double dmax[CB::kW];  // the hysteretic law's delta_max of the four lanes
   for (int e = e0; e < e1; e += CB::kW) {
     const int valid = e1 - e < CB::kW ? e1 - e : CB::kW;
     // The partners of the entries 16 ahead (four vectors): their lines are requested now, so
@@ -336,8 +353,12 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
       } else {
         load3(w, ii, c.wi0, c.wi1, c.wi2), load3(w, jj, c.wj0, c.wj1, c.wj2);
       }
-      load3(hist, sr + e, c.s0, c.s1, c.s2);
+      if constexpr (L == BatchLaw::Hysteretic)
+        load4(hist, sr + e, c.D, c.s0, c.s1, c.s2);
+      else
+        load3(hist, sr + e, c.s0, c.s1, c.s2);
       CB::law<L>(c, par, vdt, form, touch);
+      if constexpr (L == BatchLaw::Hysteretic) CB::store(dmax, c.D);
       // Unpacked into (x, y) pairs, so that the scatter below moves each lane's vectors as
       // one 16-byte pair and a z: a third fewer loads, stores and additions than component
       // by component (1.00-1.06x within one run), each component's operation unchanged.
@@ -372,8 +393,9 @@ GRANULAR_AVX2 void near_stream_slab(const HostParticleViews& hv, const PeriodicB
       fj[2] -= z4[0][l];
       qxy = _mm_add_pd(qxy, _mm_load_pd(xy[1] + at)), qz += z4[1][l];
       add3(q + j3, _mm_load_pd(xy[2] + at), z4[2][l]);
-      _mm_storeu_pd(h, _mm_load_pd(xy[3] + at));
-      h[2] = z4[3][l];
+      if constexpr (O > 0) h[0] = dmax[l];
+      _mm_storeu_pd(h + O, _mm_load_pd(xy[3] + at));
+      h[O + 2] = z4[3][l];
     }
   }
   if (cur >= 0) add3(f + 3L * cur, fxy, fz), add3(q + 3L * cur, qxy, qz);

@@ -525,11 +525,11 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
                            int q_end) {
   constexpr int H = Model::history;
   constexpr bool rot = Model::rotations;
-  static_assert(H == 3 && rot, "the batched law has a tangential spring");
-  static_assert(ContactBatch::kCap <= SplitOut::kMax, "a batch-sized row must fit one split");
-  const double r3[3] = {rate[0], rate[1], rate[2]};  // a local copy: no reloads after stores
   using Law = ContactBatchLaw<Model>;
   constexpr BatchLaw L = Law::law;
+  static_assert(H == batch_history(L) && rot, "the batched law has a tangential spring");
+  static_assert(ContactBatch::kCap <= SplitOut::kMax, "a batch-sized row must fit one split");
+  const double r3[3] = {rate[0], rate[1], rate[2]};  // a local copy: no reloads after stores
   ContactBatch cb;
   if (Law::uniform(m)) cb.set_uniform(Law::pair(m, 0, 0));
   cb.form = Law::form(m);
@@ -552,8 +552,7 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
           qi[d] += qa[d];
           qh(j, d) += qb[d];
         }
-        double* h = hist + cb.k[c] * H;  // the contact's history row
-        h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
+        cb.store_history<L>(c, hist + cb.k[c] * H);  // the contact's history row
       }
       for (int d = 0; d < 3; ++d) fh(i, d) += fi[d];
       for (int d = 0; d < 3; ++d) qh(i, d) += qi[d];
@@ -588,7 +587,7 @@ void one_pass_rows_batched(const HostParticleViews& hv, const PeriodicBox& b, co
       const int r = row0 + cb.k[c];  // history row
       cb.k[c] = r;
       const Body bj = load_body(hv, cb.j[c], rot);
-      cb.set_motion<L == BatchLaw::HertzRestitution>(c, bi, bj, r3, hist + r * H);
+      cb.set_contact<L>(c, bi, bj, r3, hist + r * H);
       if (!cb.uniform) cb.set_params(c, Law::pair(m, bi.s, bj.s));
     }
     cb.row_i[cb.rows] = i, cb.row_end[cb.rows] = cb.n, ++cb.rows;
@@ -618,9 +617,9 @@ void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborLi
                                  const PeriodicBox& box, const Model& m,
                                  const double strain_rate[3], double dt, const Hook& hook) {
   constexpr int H = Model::history;
-  static_assert(H == 3 && Model::rotations, "the batched law has a tangential spring");
   using Law = ContactBatchLaw<Model>;
   constexpr BatchLaw L = Law::law;
+  static_assert(H == batch_history(L) && Model::rotations, "the batched law has a spring");
   constexpr int kTask = 64;  // particles per task
   const HostParticleViews hv(p);
   const HostListRows list(nl);
@@ -645,8 +644,7 @@ void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborLi
         pair(k, 0) = cb.f0[c], pair(k, 1) = cb.f1[c], pair(k, 2) = cb.f2[c];
         pair(k, 3) = cb.q0[c], pair(k, 4) = cb.q1[c], pair(k, 5) = cb.q2[c];
         pair(k, 6) = cb.p0[c], pair(k, 7) = cb.p1[c], pair(k, 8) = cb.p2[c];
-        double* h = hist + cb.k[c] * H;
-        h[0] = cb.h0[c], h[1] = cb.h1[c], h[2] = cb.h2[c];
+        cb.store_history<L>(c, hist + cb.k[c] * H);
         PairState s{};
         s.n[0] = cb.n0[c], s.n[1] = cb.n1[c], s.n[2] = cb.n2[c];
         s.delta = cb.overlap[c];
@@ -674,7 +672,7 @@ void compute_pair_forces_batched(const Particles<ExecSpace>& p, const NeighborLi
         entry[c] = k, cb.k[c] = row0 + k, cb.j[c] = j;
         cb.rx[c] = rx, cb.ry[c] = ry, cb.rz[c] = rz;
         const Body bj = load_body(hv, j, true);
-        cb.set_motion<L == BatchLaw::HertzRestitution>(c, bi, bj, r3, hist + (row0 + k) * H);
+        cb.set_contact<L>(c, bi, bj, r3, hist + (row0 + k) * H);
         if (!cb.uniform) cb.set_params(c, Law::pair(m, bi.s, bj.s));
         si[c] = bi.s, sj[c] = bj.s;
         if constexpr (Hook::corrected) hook.corrections(k, cb.c0[c], cb.c1[c]);

@@ -103,21 +103,9 @@ class DemSystem {
   DemSystem(Particles<ExecSpace> particles, const PeriodicBox& box, const Model& model,
             const DemParams& params)
       : p_(std::move(particles)), box_(box), model_(model), params_(params), nl_(params.skin) {
-    if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
-    {  // scoped: on a host backend the mirror is the array itself, which the sort replaces
-      auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
-      for (int i = 0; i < p_.n; ++i) {
-        particle_volume_ += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
-        a_min_ = std::min(a_min_, radius(i));
-        a_max_ = std::max(a_max_, radius(i));
-      }
-    }
-    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
+    particle_volume_ = set_up();
     check_time_step();
     wrap_positions(p_, box_);  // inputs (data files) may hold positions outside the box
-    nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
-    nl_.keep_mirror(false);  // the indices the first build makes (size_pair_buffer)
-    nl_.keep_pair_index(two_pass());
     rebuild();
     forces(0.0);  // initial forces: no spring increment for a step not taken
   }
@@ -131,20 +119,9 @@ class DemSystem {
   struct Saved;
   DemSystem(const Saved& s, const Model& model, const DemParams& params, const std::string& origin)
       : p_(s.particles), box_(s.box), model_(model), params_(params), nl_(params.skin) {
-    if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
     if (s.wall_history.extent(0) > 0 || s.wall_record.extent(0) > 0)
       throw InputError(origin + " holds walls: restore it into a system with the same walls");
-    {
-      auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
-      for (int i = 0; i < static_cast<int>(radius.extent(0)); ++i) {
-        a_min_ = std::min(a_min_, radius(i));
-        a_max_ = std::max(a_max_, radius(i));
-      }
-    }
-    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
-    nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
-    nl_.keep_mirror(false);
-    nl_.keep_pair_index(two_pass());
+    set_up();  // the saved state brings its particle volume
     restore(s, origin);
     check_time_step();
   }
@@ -451,6 +428,26 @@ class DemSystem {
   }
 
  private:
+  // What both constructors derive from the particles and the parameters: the radius range
+  // the time-step guard reads, whether an external field acts, and the neighbour list's
+  // partition. Returns the particles' total volume.
+  double set_up() {
+    if (!(params_.dt > 0)) throw InputError("time step dt must be positive");
+    double volume = 0.0;
+    {  // scoped: on a host backend the mirror is the array itself, which the sort replaces
+      auto radius = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.radius);
+      for (int i = 0; i < p_.n; ++i) {
+        volume += 4.0 / 3.0 * M_PI * radius(i) * radius(i) * radius(i);
+        a_min_ = std::min(a_min_, radius(i));
+        a_max_ = std::max(a_max_, radius(i));
+      }
+    }
+    for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
+    nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
+    nl_.keep_mirror(false);  // the indices the first build makes (size_pair_buffer)
+    nl_.keep_pair_index(two_pass());
+    return volume;
+  }
   static constexpr bool kRot = Model::rotations;
 
   // The per-contact force array of the two-pass kernel: allocated only where that kernel

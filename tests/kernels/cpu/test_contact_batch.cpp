@@ -6,7 +6,8 @@
 // forces, torques and springs after a compression and a shear with rebuilds and two species
 // of different stiffness and friction, and for a packing whose crowded particle owns more
 // contacts than a batch holds (its row goes scalar); the same for the restitution-damped
-// Hertz-Mindlin law. Skipped where the processor has no AVX.
+// Hertz-Mindlin law, the visco-elastic Hertz law and the hysteretic law (each of its branches).
+// Skipped where the processor has no AVX.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -76,6 +77,17 @@ HertzMindlin two_species_hertz_mindlin(bool reduced, int law) {
   s.table.p[0][1] = s.table.p[1][0] = {1e5 / t, 250 / t, 0.3, 0.25, law};
   return {n, s, {}};
 }
+using HystereticFriction = ContactModel<HystereticNormal, CoulombTangential>;
+
+// The hysteretic law of the cohesive studies (k1/k2 = 0.666, k_c/k2 = 0.5) with two species and
+// the constant Coulomb spring of two_species_friction.
+HystereticFriction two_species_hysteretic() {
+  HystereticNormal n = HystereticNormal::uniform(0.666e5, 1e5, 0.5e5, 1000);
+  n.table.p[1][1] = {1.2e5, 1.5e5, 1e5, 1500};
+  n.table.p[0][1] = n.table.p[1][0] = {0.9e5, 1.2e5, 0.2e5, 1200};
+  return {n, two_species_friction().tangential, {}};
+}
+
 // The three forms the studies use.
 const int kMindlinForms[3][2] = {{1, CoulombTangential::Constant},
                                  {0, CoulombTangential::MindlinPairDiameter},
@@ -192,6 +204,23 @@ TYPED_TEST(ContactBatchTest, BatchedViscoElasticHertzContactsGiveBitwiseTheScala
   }
 }
 
+// The hysteretic law in batches (delta_max ahead of the spring in each history row):
+// parameters gathered for two species, then broadcast for one.
+TYPED_TEST(ContactBatchTest, BatchedHystereticContactsGiveBitwiseTheContactByContactTrajectory) {
+  using Exec = TypeParam;
+  if constexpr (!forces_by_slabs<Exec>() || !ContactBatchLaw<HystereticFriction>::available) {
+    GTEST_SKIP() << "no batched evaluation on this backend or compiler";
+  } else {
+    if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+    compare_compression<Exec>(two_species_hysteretic());
+    HystereticFriction one = two_species_hysteretic();
+    one.normal = HystereticNormal::uniform(0.666e5, 1e5, 0.5e5, 1000);
+    one.tangential = CoulombTangential::uniform(8e4, 200, 0.5, 0.4);
+    ASSERT_TRUE(ContactBatchLaw<HystereticFriction>::uniform(one));
+    compare_compression<Exec>(one);
+  }
+}
+
 // One parameter set for every pair: the batch broadcasts it instead of gathering it.
 TYPED_TEST(ContactBatchTest, BroadcastParametersOfOneSpeciesGiveBitwiseTheScalarTrajectory) {
   using Exec = TypeParam;
@@ -268,13 +297,19 @@ TYPED_TEST(ContactBatchTest, CrowdedRowBeyondTheBatchCapacityKeepsBitwiseTheSame
 // Each lane of the batched law L against the scalar law, on 37 contacts that take every
 // branch. `tweak(c, one, a, b)` changes pair (a, b)'s parameters of the scalar model `one`
 // for contact c (the batch takes the same parameters).
+// Laws with a history ahead of the spring (the hysteretic law's delta_max) start contacts on
+// each of its branches in turn: virgin loading, the k2 branch, the adhesive branch, at
+// delta_max; each must be taken.
 template <class Model, class Tweak>
 void expect_lanes_equal_scalar_law(const Model& model, Tweak tweak) {
+  constexpr int H = Model::history;
+  constexpr int O = batch_spring_at(ContactBatchLaw<Model>::law);  // the spring in the row
+  static_assert(H == O + 3, "a spring of three after the normal law's history");
   const double dt = 0.003;
   ContactBatch cb;
   cb.form = ContactBatchLaw<Model>::form(model);
-  std::vector<std::array<double, 12>> expected;
-  int slid = 0;
+  std::vector<std::array<double, 13>> expected;
+  int slid = 0, branches[3] = {0, 0, 0};
   for (int c = 0; c < 37; ++c) {  // not a multiple of the lane count: the padding is used
     const double u = 0.37 * c;
     Body bi{}, bj{};
@@ -296,30 +331,56 @@ void expect_lanes_equal_scalar_law(const Model& model, Tweak tweak) {
     pair_geometry(bi, bj, rx, ry, rz, r2, rate, true, s);
     // Springs: mostly small (sticking), some large (sliding), one empty, some far out of
     // the plane (the exact restoring factor instead of its series).
-    std::array<double, 3> h = {1e-4 * std::sin(5 * u), 1e-4 * std::cos(7 * u), 2e-5 * c};
-    if (c % 5 == 1) h = {0.3 * std::sin(u), -0.2, 0.1};
-    if (c % 7 == 3) h = {s.n[0] * 1e-3 + 1e-4, s.n[1] * 1e-3, s.n[2] * 1e-3};
-    if (c == 4) h = {0, 0, 0};
+    std::array<double, 3> spring = {1e-4 * std::sin(5 * u), 1e-4 * std::cos(7 * u), 2e-5 * c};
+    if (c % 5 == 1) spring = {0.3 * std::sin(u), -0.2, 0.1};
+    if (c % 7 == 3) spring = {s.n[0] * 1e-3 + 1e-4, s.n[1] * 1e-3, s.n[2] * 1e-3};
+    if (c == 4) spring = {0, 0, 0};
+    std::array<double, H> h{};
+    for (int d = 0; d < 3; ++d) h[O + d] = spring[d];
+    if constexpr (O > 0)
+      h[0] = (c % 4 == 0 ? 0.0 : c % 4 == 1 ? 1.2 : c % 4 == 2 ? 10.0 : 1.0) * s.delta;
     // The scalar law with this contact's parameters, and the batch with the same.
     Model one = model;
     tweak(c, one, bi.s, bj.s);
     cb.push(bi, bj, c, c, rx, ry, rz, rate, ContactBatchLaw<Model>::pair(one, bi.s, bj.s),
-            h.data());
-    std::array<double, 3> probe = h;
+            h.data() + O);
+    if constexpr (O > 0) cb.hd[c] = h[0];
+    std::array<double, H> probe = h;
     double ft[3];
-    slid += one.tangential.force(s, one.normal.force(s, nullptr), dt, probe.data(), ft);
+    const double fn = one.normal.force(s, probe.data());
+    slid += one.tangential.force(s, fn, dt, probe.data() + O, ft);
+    if constexpr (O > 0) {
+      const HystereticNormal::Params& q = one.normal.table(bi.s, bj.s);
+      double dm = h[0];
+      const double elastic = HystereticNormal::piecewise(q, s.delta, dm);
+      ++branches[elastic == q.k1 * s.delta ? 0 : elastic == -q.kc * s.delta ? 2 : 1];
+    }
     PairForce out;
     one.evaluate(s, dt, h.data(), out);
     expected.push_back({out.f[0], out.f[1], out.f[2], out.q[0], out.q[1], out.q[2], out.qj[0],
-                        out.qj[1], out.qj[2], h[0], h[1], h[2]});
+                        out.qj[1], out.qj[2], h[O], h[O + 1], h[O + 2], O > 0 ? h[0] : 0.0});
   }
   cb.evaluate<ContactBatchLaw<Model>::law>(dt);
   ASSERT_GE(slid, 5) << "too few sliding lanes";
   ASSERT_LE(slid, cb.n - 10) << "too few sticking lanes";
+  if constexpr (O > 0) {
+    for (int b = 0; b < 3; ++b) EXPECT_GE(branches[b], 3) << "too few contacts on branch " << b;
+  }
   for (int c = 0; c < cb.n; ++c) {
-    const double got[12] = {cb.f0[c], cb.f1[c], cb.f2[c], cb.q0[c], cb.q1[c], cb.q2[c],
-                            cb.p0[c], cb.p1[c], cb.p2[c], cb.h0[c], cb.h1[c], cb.h2[c]};
-    for (int e = 0; e < 12; ++e)
+    const double got[13] = {cb.f0[c],
+                            cb.f1[c],
+                            cb.f2[c],
+                            cb.q0[c],
+                            cb.q1[c],
+                            cb.q2[c],
+                            cb.p0[c],
+                            cb.p1[c],
+                            cb.p2[c],
+                            cb.h0[c],
+                            cb.h1[c],
+                            cb.h2[c],
+                            O > 0 ? cb.hd[c] : 0.0};
+    for (int e = 0; e < 13; ++e)
       EXPECT_EQ(std::memcmp(&got[e], &expected[c][e], sizeof(double)), 0)
           << "contact " << c << " value " << e << ": " << got[e] << " vs " << expected[c][e];
   }
@@ -352,6 +413,24 @@ TEST(ContactBatchLawTest, EveryHertzLaneEqualsTheScalarLawBitwiseOnEachBranch) {
     if (c == 10 || c == 12) pn.alpha = 40.0;   // the dashpot outweighs the spring
     if (c == 11) pt.gt = 0.0, pn.alpha = 0.0;  // no damping
   });
+}
+
+// The hysteretic law: delta_max per lane, each branch of the piecewise force (the adhesive one
+// moves delta_max), with the constant Coulomb spring.
+TEST(ContactBatchLawTest, EveryHystereticLaneEqualsTheScalarLawBitwiseOnEachBranch) {
+  if (!cpu_has_avx()) GTEST_SKIP() << "the processor has no AVX";
+  const double inf = std::numeric_limits<double>::infinity();
+  expect_lanes_equal_scalar_law(two_species_hysteretic(),
+                                [&](int c, HystereticFriction& m, int a, int b) {
+                                  CoulombTangential::Params& pt = m.tangential.table.p[a][b];
+                                  HystereticNormal::Params& pn = m.normal.table.p[a][b];
+                                  if (c == 6) pt.kt = 0.0;              // no tangential stiffness
+                                  if (c == 8) pt.mu_s = pt.mu_d = inf;  // never slides
+                                  if (c == 10 || c == 14)
+                                    pn.kc = 0.0;  // no adhesion: the branch gives zero force
+                                  if (c == 11) pt.gt = 0.0, pn.gn = 0.0;  // no damping
+                                  if (c == 13) pn.k1 = pn.k2;             // no plastic overlap
+                                });
 }
 
 // The visco-elastic Hertz law in each form: the normal length, the spring's scale (none for
@@ -400,6 +479,15 @@ TEST(ContactBatchLawTest, EachBatchedLawTakesOnlyItsOwnFormsOfTheSpring) {
   h.coulomb_elastic_normal = true;
   EXPECT_FALSE(ContactBatchLaw<HertzFriction>::usable(h))
       << "the batch limits with the total force";
+  // The hysteretic law: the constant spring, the limit with the total force.
+  HystereticFriction y = two_species_hysteretic();
+  EXPECT_TRUE(ContactBatchLaw<HystereticFriction>::usable(y));
+  EXPECT_FALSE(ContactBatchLaw<HystereticFriction>::uniform(y));
+  y.tangential.table.p[0][0].law = CoulombTangential::MindlinPairDiameter;
+  EXPECT_FALSE(ContactBatchLaw<HystereticFriction>::usable(y));
+  y = two_species_hysteretic();
+  y.coulomb_elastic_normal = true;
+  EXPECT_FALSE(ContactBatchLaw<HystereticFriction>::usable(y));
   EXPECT_FALSE((ContactBatchLaw<ContactModel<LinearNormal>>::available))
       << "the frictionless law measured slower batched";
 }

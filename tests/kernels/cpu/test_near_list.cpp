@@ -31,6 +31,7 @@ using Frictional = ContactModel<LinearNormal, CoulombTangential>;
 using Rolling = ContactModel<LinearNormal, CoulombTangential, RollingTorsion>;
 using HertzFrictional = ContactModel<HertzRestitutionNormal, CoulombTangential>;
 using HertzMindlin = ContactModel<HertzNormal, CoulombTangential>;
+using Hysteretic = ContactModel<HystereticNormal, CoulombTangential>;
 
 Frictionless make_model(Frictionless*) { return {LinearNormal::uniform(1e5, 1000), {}, {}}; }
 Frictional make_model(Frictional*) {
@@ -48,6 +49,12 @@ HertzFrictional make_model(HertzFrictional*) {
 HertzMindlin make_model(HertzMindlin*) {
   return {HertzNormal{PairTable<HertzNormal::Params>::uniform({1e6, 1e4, false})},
           CoulombTangential::uniform(8e5, 2e3, 0.5, 0.5, CoulombTangential::MindlinPairDiameter),
+          {}};
+}
+// The cohesive studies' hysteretic law (k1/k2 = 0.666, k_c/k2 = 0.5) with the constant spring.
+Hysteretic make_model(Hysteretic*) {
+  return {HystereticNormal::uniform(0.666e5, 1e5, 0.5e5, 1000),
+          CoulombTangential::uniform(8e4, 200, 0.5, 0.5),
           {}};
 }
 Rolling make_model(Rolling*) {
@@ -280,6 +287,17 @@ TYPED_TEST(NearListTest, HertzStreamOfTheNearListGivesTheBitsOfItsRows) {
   compare_stream_with_rows<TypeParam, HertzFrictional>(-1.0);
   compare_stream_with_rows<TypeParam, HertzMindlin>(0.025);
   compare_stream_with_rows<TypeParam, HertzMindlin>(-1.0);
+}
+
+// The hysteretic law's rows of four (delta_max, then the spring): batched and scalar rows, the
+// stream, and the stream from the packed records.
+TYPED_TEST(NearListTest, HystereticRowsStreamAndPackedRecordsFromTheNearListGiveTheSameBits) {
+  if constexpr (!forces_by_slabs<TypeParam>()) GTEST_SKIP() << "host one-pass kernel only";
+  compare_with_whole_rows<TypeParam, Hysteretic>(true);
+  compare_with_whole_rows<TypeParam, Hysteretic>(false);
+  compare_stream_with_rows<TypeParam, Hysteretic>(0.025);
+  compare_stream_with_rows<TypeParam, Hysteretic>(-1.0);
+  compare_packed_with_arrays<TypeParam, Hysteretic>();
 }
 
 TYPED_TEST(NearListTest, FrictionlessStreamOfTheNearListGivesTheBitsOfItsRows) {
