@@ -9,7 +9,7 @@
 //                        [--alternate batch|near|stream|skin|rows|pack [--block B]]
 //                        [--skin-b S] [--zero-rows] [--no-pack] [--pack-min N]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
-//                        [--tile NX,NY,NZ] [--no-memory]
+//                        [--tile NX,NY,NZ] [--no-memory] [--walls]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --near-skin S: the force pass's near list (DemParams::near_skin: < 0, the default, a 32nd of
@@ -37,6 +37,9 @@
 // Every row records the peak of the device allocations during its first repetition, array
 // by array (perf/allocation_tracker.hpp), and a minimal-traffic model of the step beside the
 // engine's own byte count (docs/gpu_memory.md); --no-memory leaves the tracking out.
+// --walls: the box's z faces are planar walls with the pair's own law (a wall of infinite radius
+// and mass, as LAMMPS' fix wall/gran): the peer comparison's walled box (perf/peer/walls.lmp
+// makes its packing from the periodic one).
 // --no-triad skips the bandwidth measurements, triad and copy (their 768 MiB of arrays would
 // also dominate the peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
@@ -174,7 +177,7 @@ int main(int argc, char** argv) {
     int pack_min = DemParams{}.packed_stream_min_particles;
     long steps = 2000, warmup = 500;
     std::vector<int> tile{1, 1, 1};
-    bool track_memory = true;
+    bool track_memory = true, walls = false;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto next = [&]() -> std::string {
@@ -223,6 +226,8 @@ int main(int argc, char** argv) {
         tile = parse_sizes(next());
       else if (a == "--no-memory")
         track_memory = false;
+      else if (a == "--walls")
+        walls = true;
       else if (a == "--block-rows")
         block_rows = std::stoi(next());
       else if (a.rfind("--kokkos", 0) != 0) {
@@ -305,6 +310,11 @@ int main(int argc, char** argv) {
             host = dense_packing(n_req, box, cache_dir);
             source = "generated (seed 12345)";
           }
+          if (walls) {
+            if (tile[2] != 1) throw InputError("--walls: the packing is not tiled along z");
+            box.periodic[2] = false;
+            source += ", z faces closed by walls";
+          }
           const int n = host.size();
           std::vector<double> rates, alternated;
           StepProfile prof;
@@ -333,6 +343,13 @@ int main(int argc, char** argv) {
             // The last system no longer needs the file's copy: peak memory is the engine's.
             if (r == reps - 1) host = HostParticles();
             DemSystem<Exec, Model> sys(std::move(particles), box, model, prm);
+            if (walls) {  // the floor and the ceiling, outward normals, the pairs' material
+              WallSpec lo, hi;
+              lo.name = "floor", hi.name = "ceiling";
+              lo.normal[2] = -1.0, hi.normal[2] = 1.0;
+              lo.point[2] = box.lo[2], hi.point[2] = box.lo[2] + box.len[2];
+              sys.set_walls({lo, hi});
+            }
             if (r == 0) {
               const Measurements mi = sys.measure();
               z_initial = mi.z, ekin_initial = mi.ekin - mi.ekin_rot;
@@ -475,6 +492,7 @@ int main(int argc, char** argv) {
           if (phys == "hertz_tsuji") row["law_as_lammps_pair_coeff"] = kHertzTsujiCoeff;
           row["N"] = n;
           row["source"] = source;
+          row["walls"] = walls ? "z" : "none";
           row["threads"] = threads;
           row["phi"] = phi;
           row["z_initial"] = z_initial;

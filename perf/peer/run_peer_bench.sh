@@ -5,6 +5,8 @@
 #   perf/peer/run_peer_bench.sh                    # N = 4096 32768, 3 repetitions
 #   perf/peer/run_peer_bench.sh --big              # also N = 262144 (a 2x2x2 replica of 32768)
 #   perf/peer/run_peer_bench.sh --sizes "4096" --reps 5
+#   perf/peer/run_peer_bench.sh --walls --sizes 32768 --physics hertz_tsuji \
+#       --models "hertz_mass hertz_tsuji"           # the walled box (z faces closed by walls)
 #
 #   1. installs LAMMPS (Debian package lammps, MPI build), GNU time and matplotlib if missing;
 #   2. builds the engine (scripts/setup.sh);
@@ -24,6 +26,9 @@
 #          --models "hooke_abs hooke_mass frictionless_abs frictionless_mass"
 #          --physics "friction frictionless"  --threads "1 2"  --ranks "1 2"
 #          --no-install  --no-build  --results DIR (default perf/results)
+#          --walls        the walled box: each packing with its z faces closed by flat walls
+#                         (perf/peer/walls.lmp cuts packing_walls_<N>.data from packing_<N>.data
+#                         and relaxes it; LAMMPS fix wall/gran, the engine's --walls)
 #          --nice LEVEL   run every timed process (both codes alike) at this nice level; a
 #                         negative level (root) shields the timings from other work on a
 #                         shared machine
@@ -45,6 +50,7 @@ install=1
 build=1
 results=$repo/perf/results
 nice_level=0
+walls=0
 while [ $# -gt 0 ]; do
   case $1 in
     --sizes) sizes=$2; shift ;;
@@ -60,6 +66,7 @@ while [ $# -gt 0 ]; do
     --no-build) build=0 ;;
     --results) results=$2; shift ;;
     --nice) nice_level=$2; shift ;;
+    --walls) walls=1 ;;
     -h | --help) sed -n '2,30p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
@@ -117,6 +124,21 @@ make_packing() {  # n
   mv "$f.tmp" "$f"
 }
 for n in $sizes; do make_packing "$n"; done
+# The walled box: particles crossing a z face removed, the rest relaxed against the walls.
+make_walls_packing() {  # n
+  local f=$peer/data/packing_walls_$1.data
+  [ -s "$f" ] && return 0
+  say "making the walled packing from N = $1 with LAMMPS (cached in $f)"
+  (cd "$peer/data" && lmp -in "$peer/walls.lmp" -var in "packing_$1.data" \
+    -var out "packing_walls_$1.data.tmp" -log "gen_walls_$1.log" -echo none -screen none)
+  grep WALLS_DONE "$peer/data/gen_walls_$1.log" >&2 || true
+  mv "$f.tmp" "$f"
+}
+packing=packing_ engine_walls=() lammps_walls=()
+if [ "$walls" = 1 ]; then
+  for n in $sizes; do make_walls_packing "$n"; done
+  packing=packing_walls_ engine_walls=(--walls) lammps_walls=(-var walls z)
+fi
 
 # ---- 4. interleaved timing ---------------------------------------------------------------
 stamp=$(date -u +%Y%m%dT%H%M%SZ)
@@ -133,20 +155,21 @@ prio=(nice -n "$nice_level")
   echo "lammps_version=$(dpkg-query -W -f='${Version}' lammps 2>/dev/null || echo unknown)"
   echo "mpirun_version=$(mpirun --version 2>/dev/null | head -n1)"
   echo "git_commit=$(git -C "$repo" rev-parse --short HEAD 2>/dev/null || echo unknown)"
-  for n in $sizes; do echo "md5_$n=$(md5sum < "$peer/data/packing_$n.data" | cut -d' ' -f1)"; done
+  echo "walls=$([ "$walls" = 1 ] && echo z || echo none)"
+  for n in $sizes; do echo "md5_$n=$(md5sum < "$peer/data/$packing$n.data" | cut -d' ' -f1)"; done
 } > "$logs/settings.txt"
 
 run_engine() {  # physics n threads rep
   local out=$logs/engine_$1_N$2_t$3_r$4
   OMP_NUM_THREADS=$3 "${prio[@]}" /usr/bin/time -f "$timefmt" "$bench" --kokkos-threads="$3" --no-triad \
-    --data "$peer/data/packing_$2.data" --physics "$1" --reps 1 --steps "$steps" \
-    --warmup "$warmup" --out "$out.json" > "$out.log" 2>&1 || say "FAILED: $out.log"
+    --data "$peer/data/$packing$2.data" "${engine_walls[@]}" --physics "$1" --reps 1 \
+    --steps "$steps" --warmup "$warmup" --out "$out.json" > "$out.log" 2>&1 || say "FAILED: $out.log"
   say "$(date -u +%T) engine $1 N=$2 threads=$3 rep=$4: $(grep -m1 -o 'median [0-9.e+-]* M' "$out.log" || echo '?')"
 }
 run_lammps() {  # model n ranks rep
   local out=$logs/lammps_$1_N$2_np$3_r$4.log
-  local args=(-in "$peer/bench.lmp" -var data "$peer/data/packing_$2.data" -var model "$1"
-    -var nrun "$steps" -var nwarm "$warmup" -log none -echo none)
+  local args=(-in "$peer/bench.lmp" -var data "$peer/data/$packing$2.data" -var model "$1"
+    -var nrun "$steps" -var nwarm "$warmup" "${lammps_walls[@]}" -log none -echo none)
   if [ "$3" = 1 ]; then
     OMP_NUM_THREADS=1 "${prio[@]}" /usr/bin/time -f "$timefmt" lmp "${args[@]}" > "$out" 2>&1 || say "FAILED: $out"
   else

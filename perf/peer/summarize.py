@@ -234,6 +234,11 @@ if machine:
              % (machine.get("cpu_model"), machine.get("hardware_threads"), machine.get("compiler"),
                 machine.get("kokkos_execution_space"), settings.get("lammps_version"),
                 settings.get("reps"), settings.get("steps"), settings.get("warmup")))
+if settings.get("walls") == "z":
+    L.append("Walled box: the z faces of each packing are flat walls with the pair's law (LAMMPS `fix "
+             "wall/gran`, the engine's planar walls), the packing `packing_walls_<N>.data` made from the "
+             "periodic one by perf/peer/walls.lmp (particles crossing a face removed, then relaxed "
+             "against the walls); N names the periodic packing it was cut from.\n")
 L.append("## Throughput (median, million particle-steps/s) and ratio engine/LAMMPS\n")
 L.append("| engine physics | LAMMPS style | N | engine 1 thread | LAMMPS 1 rank | ratio 1:1 | engine 2 threads | LAMMPS 2 ranks | ratio 2:2 |")
 L.append("|---|---|---|---|---|---|---|---|---|")
