@@ -183,6 +183,7 @@ class DemSystem {
     constexpr int H = Model::history;
     wall_history_ = wall_view("dem::wall_history", nw > 0 && H > 0 ? p_.n : 0, nw * H);
     wall_record_ = wall_view("dem::wall_record", nw > 0 ? p_.n : 0, nw * kWallColumns);
+    wall_touch_ = WallTouchView<ExecSpace>("dem::wall_touch", nw > 0 ? p_.n : 0, nw);
     mc_.resize_walls(p_.n, nw);
     external_ = nw > 0;
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
@@ -239,6 +240,7 @@ class DemSystem {
       p_.permute(order);
       permute_rows<ExecSpace>(wall_history_, order, p_.n);
       permute_rows<ExecSpace>(wall_record_, order, p_.n);
+      permute_rows<ExecSpace>(wall_touch_, order, p_.n);
       mc_.reorder(order, p_.n);
     }
     nl_.build(p_, box_, params_.sort);
@@ -421,6 +423,7 @@ class DemSystem {
     nl_.restore(s.list, origin + "/neighbor_list");
     history_.restore(s.history, nl_, origin + "/history");
     wall_history_ = s.wall_history, wall_record_ = s.wall_record;
+    wall_touch_ = wall_touch_of<ExecSpace>(wall_record_, p_.n, walls_.size());
     time_ = s.time, steps_ = s.steps, particle_volume_ = s.particle_volume, box_ = s.box;
     for (int d = 0; d < 3; ++d) rate_[d] = s.rate[d];
     walls_.update(time_);
@@ -584,7 +587,7 @@ class DemSystem {
               bool tracked = false, const double* pack = nullptr) {
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
-                  wall_history_, wall_record_, params_.gravity, external_,
+                  wall_history_, wall_record_, wall_touch_, params_.gravity, external_,
                   params_.batched_contacts);
       return;
     }
@@ -595,8 +598,8 @@ class DemSystem {
                    params_.contact_thread_per_particle, started,
                    params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>());
     if (external_)
-      add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
-                          params_.gravity, dt);
+      add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_,
+                          wall_touch_, model_, params_.gravity, dt);
   }
   // Forces of a state whose contacts have no previous evaluation under the current law.
   void initial_forces() {
@@ -748,6 +751,7 @@ class DemSystem {
   StepProfile* profile_ = nullptr;
   WallSet<ExecSpace> walls_;
   wall_view wall_history_, wall_record_;
+  WallTouchView<ExecSpace> wall_touch_;  // the record's contact flags (wall_forces.hpp)
   bool external_ = false;  // walls or gravity: one more pass over the particles per step
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both

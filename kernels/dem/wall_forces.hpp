@@ -6,6 +6,7 @@
 // laws act through a hook, as in the pair pass.
 #pragma once
 #include <Kokkos_Core.hpp>
+#include <cmath>
 #include <vector>
 
 #include "core/dem/particles.hpp"
@@ -16,13 +17,19 @@
 
 namespace granular {
 
+// The overlap a + gap of a sphere (centre x, radius a) with wall w, the gap being the signed
+// distance along the wall's outward normal (negative inside): the sphere touches where it is
+// positive.
+KOKKOS_INLINE_FUNCTION double wall_overlap(const double x[3], double a, const Wall& w) {
+  const double gap = (x[0] - w.p[0]) * w.n[0] + (x[1] - w.p[1]) * w.n[1] + (x[2] - w.p[2]) * w.n[2];
+  return a + gap;
+}
+
 // Geometry and relative motion of particle bi against wall w; false if they do not touch.
 // The normal points from the wall into the particle (the direction of the force on it).
 KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool rotations,
                                           PairState& s) {
-  const double gap = (bi.x[0] - w.p[0]) * w.n[0] + (bi.x[1] - w.p[1]) * w.n[1] +
-                     (bi.x[2] - w.p[2]) * w.n[2];  // signed distance, negative inside
-  const double delta = bi.a + gap;
+  const double delta = wall_overlap(bi.x, bi.a, w);
   if (!(delta > 0.0)) return false;
   s.n[0] = -w.n[0], s.n[1] = -w.n[1], s.n[2] = -w.n[2];
   s.delta = delta;
@@ -51,6 +58,14 @@ KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool ro
 // about its reference point (3), contact flag, elastic energy, overlap / a_i.
 constexpr int kWallColumns = 9;
 
+// The contact flags of the record (column 6) as one byte per (particle, wall): what the wall
+// pass reads for every particle, where the record's rows (72 bytes a wall) are read only for
+// contacts. Reading the flag from the record stalled the pass on a cache miss per particle
+// (a quarter of the step in a box of 32768 spheres between two walls).
+template <class ExecSpace>
+using WallTouchView =
+    Kokkos::View<unsigned char**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
+
 // Extension point for laws that need more than the contact (multi-contact,
 // kernels/dem/multicontact.hpp): a hook may replace the evaluation of a touching sphere-wall
 // contact and record per-contact data. NoWallHook compiles the classical kernel unchanged.
@@ -76,33 +91,46 @@ struct WallForcePass {
   int nwalls;
   HistoryView history;
   RecordView record;
+  WallTouchView<ExecSpace> touch;
   Model m;
   Hook hook;
   double g[3];
+  bool weightless;  // g is (+0, +0, +0): m g is +0 for any particle, its mass is not read
   double dt;
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
     constexpr int H = Model::history;
     constexpr bool rot = Model::rotations;
     constexpr int WC = kWallColumns;
-    const Body bi = load_body(pv, i, rot);
-    double fi[3] = {bi.m * g[0], bi.m * g[1], bi.m * g[2]};
+    // Position and radius tell whether a wall touches; the rest of the particle is loaded
+    // for its first contact only (most particles touch no wall).
+    const double x[3] = {pv.x(i, 0), pv.x(i, 1), pv.x(i, 2)};
+    const double a = pv.radius(i);
+    Body bi{};
+    bool loaded = false;
+    double fi[3] = {0.0, 0.0, 0.0};
+    if (!weightless) {
+      const double mi = pv.mass(i);
+      for (int d = 0; d < 3; ++d) fi[d] = mi * g[d];
+    }
     double qi[3] = {0, 0, 0};
     for (int w = 0; w < nwalls; ++w) {
-      const Wall wall = walls(w);
-      PairState s;
-      if (!wall_geometry(bi, wall, rot, s)) {
-        // Most particles touch no wall: their record and history are already zero (the
-        // contact flag says so), and rewriting them every step cost more memory traffic
-        // than the contacts themselves.
-        if (record(i, w * WC + 6) != 0.0) {
+      const Wall& wall = walls(w);  // a reference: a copy on the stack stalled every load of it
+      if (!(wall_overlap(x, a, wall) > 0.0)) {  // wall_geometry's own test
+        // Its record and history are already zero unless the contact just ended (the flag
+        // says so): rewriting them every step cost more memory traffic than the contacts.
+        if (touch(i, w) != 0) {
           for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
+          touch(i, w) = 0;
         }
         if constexpr (Hook::active) hook.apart(i, w);
         continue;
       }
+      if (!loaded) bi = load_body(pv, i, rot), loaded = true;
+      PairState s;
+      if (!wall_geometry(bi, wall, rot, s)) continue;  // never: the test above, the same numbers
       double h[H > 0 ? H : 1];
       if constexpr (H > 0)
         for (int c = 0; c < H; ++c) h[c] = history(i, w * H + c);
@@ -128,6 +156,7 @@ struct WallForcePass {
       record(i, w * WC + 6) = 1.0;
       record(i, w * WC + 7) = m.energy(s, h);
       record(i, w * WC + 8) = s.delta / s.ai;
+      touch(i, w) = 1;
     }
     for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
     if constexpr (rot)
@@ -137,13 +166,18 @@ struct WallForcePass {
 
 // Adds wall contact forces and gravity to f and torque (after the pair gather), advances
 // the wall histories, and records each wall's share per particle for the wall sums.
-// history: (n, walls * H); record: (n, walls * kWallColumns).
+// history: (n, walls * H); record: (n, walls * kWallColumns); touch: (n, walls), the record's
+// contact flags (wall_touch_of).
 template <class ExecSpace, class Model, class HistoryView, class RecordView,
           class Hook = NoWallHook>
 void add_external_forces(const Particles<ExecSpace>& p,
                          const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
-                         const HistoryView& history, const RecordView& record, const Model& model,
+                         const HistoryView& history, const RecordView& record,
+                         const WallTouchView<ExecSpace>& touch, const Model& model,
                          const double gravity[3], double dt, const Hook& wall_hook = Hook()) {
+  bool weightless = true;
+  for (int d = 0; d < 3; ++d)
+    weightless = weightless && gravity[d] == 0.0 && !std::signbit(gravity[d]);
   const WallForcePass<ExecSpace, Model, HistoryView, RecordView, Hook> pass{
       ParticleViews<ExecSpace>(p),
       p.f,
@@ -152,9 +186,11 @@ void add_external_forces(const Particles<ExecSpace>& p,
       nwalls,
       history,
       record,
+      touch,
       model,
       wall_hook,
       {gravity[0], gravity[1], gravity[2]},
+      weightless,
       dt};
   Kokkos::parallel_for(Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), pass);
 }
@@ -168,6 +204,29 @@ struct MaxOverlapPass {
     m = o > m ? o : m;
   }
 };
+
+// Row i's contact flags from the record's column 6 (a functor, as above).
+template <class RecordView, class TouchView>
+struct WallTouchPass {
+  RecordView record;
+  TouchView touch;
+  int nwalls;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    for (int w = 0; w < nwalls; ++w) touch(i, w) = record(i, w * kWallColumns + 6) != 0.0 ? 1 : 0;
+  }
+};
+
+// The contact flags of a record (n rows, nwalls walls), for a record that comes from elsewhere
+// (a restored state).
+template <class ExecSpace, class RecordView>
+WallTouchView<ExecSpace> wall_touch_of(const RecordView& record, int n, int nwalls) {
+  WallTouchView<ExecSpace> touch("dem::wall_touch", nwalls > 0 ? n : 0, nwalls);
+  if (nwalls > 0)
+    Kokkos::parallel_for(
+        "dem::wall_touch_of", Kokkos::RangePolicy<ExecSpace>(0, n),
+        WallTouchPass<RecordView, WallTouchView<ExecSpace>>{record, touch, nwalls});
+  return touch;
+}
 
 // New row i of b is old row order(i) of a (a functor, as above).
 template <class View2D, class Order>

@@ -1,16 +1,21 @@
 // Walls and mixed boundaries: a sphere on a rigid wall against the closed forms of Hertz
 // and against the equivalent symmetric pair collision, gross sliding on a wall, a wall
 // moving into a resting sphere, the weight of a settled packing carried by the floor,
-// wall history carried across reordering, and no contacts through a walled axis.
+// wall history carried across reordering, a restart while touching walls, and no contacts
+// through a walled axis.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include "core/dem/walls.hpp"
+#include "core/io/output.hpp"
 #include "kernels/dem/dem_system.hpp"
 #include "scenarios/collisions/impact.hpp"
+#include "scenarios/common/restart_file.hpp"
 #include "tests/exec_spaces.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
 
@@ -282,6 +287,56 @@ TYPED_TEST(WallTest, WallHistorySurvivesReorderingAndRebuildsIdentically) {
   for (size_t k = 0; k < every.first.size(); ++k)
     worst = std::max(worst, std::fabs(every.first[k] - skin.first[k]));
   EXPECT_LT(worst, 1e-9);
+}
+
+// A state saved while the pile bounces on its walls, restored into another system with the
+// same walls, continues bit for bit: the wall springs, the records and which wall contacts
+// stand (their flags, rebuilt from the records) come back with it, so contacts that end and
+// start again after the restart are forgotten and begun as in the run that never stopped.
+TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
+  Pile<TypeParam> pile(4, 3);
+  for (int i = 0; i < pile.h.size(); ++i) pile.h.vx[i] = 0.4 * std::sin(i), pile.h.vz[i] = -0.5;
+  auto contacts = [](const auto& sys) {
+    double c = 0;
+    for (const auto& l : sys.wall_loads()) c += l.contacts;
+    return c;
+  };
+  auto a = pile.system(0, true);
+  for (int k = 0; k < 40 && contacts(a) <= 10; ++k) a.step(250);  // falls onto the floor
+  ASSERT_GT(contacts(a), 10) << "the state must hold wall contacts";
+  // Through a restart file, as a resumed run does (saved() shares the system's arrays).
+  const auto dir = granular::testing::unique_temp_path("granular_wall_restart");
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "restart.h5").string();
+  {
+    H5Writer w(path);
+    write_restart(w, "/r", a);
+    w.commit();
+  }
+  auto b = pile.system(0, true);
+  b.step(3);  // moved on: everything must come from the file
+  load_restart(H5Reader(path), "/r", b);
+  std::filesystem::remove_all(dir);
+  double lo = contacts(a), hi = lo;
+  for (int k = 0; k < 30; ++k) {  // the wall contacts change while both run
+    a.step(100), b.step(100);
+    lo = std::min(lo, contacts(a)), hi = std::max(hi, contacts(a));
+  }
+  EXPECT_GT(hi - lo, 2) << "too few wall contacts ended or began after the restart";
+  auto host = [](const auto& v) {
+    auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+    return std::vector<double>(h.data(), h.data() + h.size());
+  };
+  EXPECT_EQ(host(a.particles().x), host(b.particles().x));
+  EXPECT_EQ(host(a.particles().v), host(b.particles().v));
+  EXPECT_EQ(host(a.particles().f), host(b.particles().f));
+  EXPECT_EQ(host(a.wall_history()), host(b.wall_history()));
+  const auto la = a.wall_loads(), lb = b.wall_loads();
+  ASSERT_EQ(la.size(), lb.size());
+  for (size_t w = 0; w < la.size(); ++w) {
+    EXPECT_EQ(la[w].contacts, lb[w].contacts) << "wall " << w;
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(la[w].force[d], lb[w].force[d]) << "wall " << w;
+  }
 }
 
 TYPED_TEST(WallTest, NoContactAcrossAWalledAxis) {
