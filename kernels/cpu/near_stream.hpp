@@ -176,16 +176,10 @@ GRANULAR_AVX2_INLINE void load3(const double* base, const int* idx, V& X, V& Y, 
   const __m128d z23 = _mm_loadh_pd(_mm_load_sd(p2 + 2), p3 + 2);
   Z = (V)_mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1);
 }
-// The quarter `at` of the packed records (ParticlePack) of the four particles k = idx[0..3],
-// as four vectors of four lanes (lane l: particle idx[l]): four aligned 32-byte loads and a
-// 4 x 4 transpose.
-GRANULAR_AVX2_INLINE void load_packed(const double* pack, int at, const int* idx, V& A, V& B, V& C,
-                                      V& D) {
-  constexpr long S = ParticlePack::kStride;
-  const __m256d r0 = _mm256_load_pd(pack + S * idx[0] + at);
-  const __m256d r1 = _mm256_load_pd(pack + S * idx[1] + at);
-  const __m256d r2 = _mm256_load_pd(pack + S * idx[2] + at);
-  const __m256d r3 = _mm256_load_pd(pack + S * idx[3] + at);
+// Four rows of four doubles (r_l: lane l's values) as four vectors of lane l's values: A takes
+// each row's first, D its last.
+GRANULAR_AVX2_INLINE void transpose4(__m256d r0, __m256d r1, __m256d r2, __m256d r3, V& A, V& B,
+                                     V& C, V& D) {
   const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
   const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
   A = (V)_mm256_permute2f128_pd(t0, t2, 0x20);
@@ -193,20 +187,22 @@ GRANULAR_AVX2_INLINE void load_packed(const double* pack, int at, const int* idx
   C = (V)_mm256_permute2f128_pd(t0, t2, 0x31);
   D = (V)_mm256_permute2f128_pd(t1, t3, 0x31);
 }
+// The quarter `at` of the packed records (ParticlePack) of the four particles k = idx[0..3],
+// as four vectors of four lanes (lane l: particle idx[l]): four aligned 32-byte loads and a
+// 4 x 4 transpose.
+GRANULAR_AVX2_INLINE void load_packed(const double* pack, int at, const int* idx, V& A, V& B, V& C,
+                                      V& D) {
+  constexpr long S = ParticlePack::kStride;
+  transpose4(_mm256_load_pd(pack + S * idx[0] + at), _mm256_load_pd(pack + S * idx[1] + at),
+             _mm256_load_pd(pack + S * idx[2] + at), _mm256_load_pd(pack + S * idx[3] + at), A, B,
+             C, D);
+}
 // The 4-vectors base[4 k .. 4 k + 3] of the four history rows k = idx[0..3] (the hysteretic
 // law's delta_max and spring), as four vectors of four lanes: four 32-byte loads and a 4 x 4
-// transpose, as load_packed.
+// transpose.
 GRANULAR_AVX2_INLINE void load4(const double* base, const int* idx, V& A, V& B, V& C, V& D) {
-  const __m256d r0 = _mm256_loadu_pd(base + 4L * idx[0]);
-  const __m256d r1 = _mm256_loadu_pd(base + 4L * idx[1]);
-  const __m256d r2 = _mm256_loadu_pd(base + 4L * idx[2]);
-  const __m256d r3 = _mm256_loadu_pd(base + 4L * idx[3]);
-  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-  A = (V)_mm256_permute2f128_pd(t0, t2, 0x20);
-  B = (V)_mm256_permute2f128_pd(t1, t3, 0x20);
-  C = (V)_mm256_permute2f128_pd(t0, t2, 0x31);
-  D = (V)_mm256_permute2f128_pd(t1, t3, 0x31);
+  transpose4(_mm256_loadu_pd(base + 4L * idx[0]), _mm256_loadu_pd(base + 4L * idx[1]),
+             _mm256_loadu_pd(base + 4L * idx[2]), _mm256_loadu_pd(base + 4L * idx[3]), A, B, C, D);
 }
 // base[k] of the four indices k = idx[0..3].
 GRANULAR_AVX2_INLINE V load1(const double* base, const int* idx) {
