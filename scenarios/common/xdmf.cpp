@@ -47,7 +47,7 @@ std::string xdmf_text(const std::string& h5_name, const std::vector<XdmfFrame>& 
     if (f.box)
       for (const char* b : {"box_lo", "box_len"}) {
         x << ind << " <Attribute Name=\"" << b << "\" AttributeType=\"Vector\" Center=\"Grid\">";
-        item("1 3", "Float", 8, f.group + "/" + b);
+        item("3", "Float", 8, f.group + "/" + b);
         x << "</Attribute>\n";
       }
     x << ind << "</Grid>\n";
