@@ -99,24 +99,45 @@ struct ContactBatchLaw {
   static bool usable(const Model&) { return false; }
   static bool uniform(const Model&) { return false; }
 };
-template <>
-struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
-  using Model = ContactModel<LinearNormal, CoulombTangential>;
+
+namespace contact_batch_detail {
+// A pair's normal parameters in the batch's slots, per law (BatchParams).
+inline BatchParams normal_slots(const LinearNormal::Params& n) { return {n.kn, n.gn}; }
+inline BatchParams normal_slots(const HertzRestitutionNormal::Params& n) { return {n.K, n.alpha}; }
+inline BatchParams normal_slots(const HertzNormal::Params& n) { return {n.K, n.G}; }
+inline BatchParams normal_slots(const HystereticNormal::Params& n) {
+  BatchParams p{n.k2, n.gn};
+  p.k1 = n.k1, p.kc = n.kc;
+  return p;
+}
+
+// What every batched law shares: a normal law with the Coulomb spring, its parameters in the
+// batch's slots, usable where the spring is limited by the total normal force and every pair's
+// spring follows `Tangential`, uniform where every pair has the parameters of pair (0, 0).
+// A law with more than one form (the visco-elastic Hertz law) hides usable() and form().
+template <class Normal, BatchLaw L, int Tangential>
+struct CoulombBatchLaw {
+  using Model = ContactModel<Normal, CoulombTangential>;
   static constexpr bool available = GRANULAR_CONTACT_BATCH;
-  static constexpr BatchLaw law = BatchLaw::Linear;
+  static constexpr BatchLaw law = L;
   static bool usable(const Model& m) {
-    return !m.coulomb_elastic_normal &&
-           contact_batch_detail::every_tangential_law(m.tangential, CoulombTangential::Constant);
+    return !m.coulomb_elastic_normal && every_tangential_law(m.tangential, Tangential);
   }
   static BatchParams pair(const Model& m, int a, int b) {
-    const LinearNormal::Params& n = m.normal.table.p[a][b];
+    BatchParams p = normal_slots(m.normal.table.p[a][b]);
     const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-    return {n.kn, n.gn, t.kt, t.gt, t.mu_s, t.mu_d};
+    p.kt = t.kt, p.gt = t.gt, p.mus = t.mu_s, p.mud = t.mu_d;
+    return p;
   }
-  static bool uniform(const Model& m) {
-    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
-  }
+  static bool uniform(const Model& m) { return uniform_pairs<ContactBatchLaw<Model>>(m); }
   static BatchForm form(const Model&) { return {}; }
+};
+}  // namespace contact_batch_detail
+
+template <>
+struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>>
+    : contact_batch_detail::CoulombBatchLaw<LinearNormal, BatchLaw::Linear,
+                                            CoulombTangential::Constant> {
   // Whether every pair has the normal parameters of pair (0, 0), bit for bit (the
   // frictionless law's stream, kernels/cpu/near_stream.hpp).
   static bool uniform_normal(const LinearNormal& l) {
@@ -132,29 +153,17 @@ struct ContactBatchLaw<ContactModel<LinearNormal, CoulombTangential>> {
   }
 };
 template <>
-struct ContactBatchLaw<ContactModel<HertzRestitutionNormal, CoulombTangential>> {
-  using Model = ContactModel<HertzRestitutionNormal, CoulombTangential>;
-  static constexpr bool available = GRANULAR_CONTACT_BATCH;
-  static constexpr BatchLaw law = BatchLaw::HertzRestitution;
-  static bool usable(const Model& m) {
-    return !m.coulomb_elastic_normal && contact_batch_detail::every_tangential_law(
-                                            m.tangential, CoulombTangential::MindlinRestitution);
-  }
-  static BatchParams pair(const Model& m, int a, int b) {
-    const HertzRestitutionNormal::Params& n = m.normal.table.p[a][b];
-    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-    return {n.K, n.alpha, t.kt, t.gt, t.mu_s, t.mu_d};
-  }
-  static bool uniform(const Model& m) {
-    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
-  }
-  static BatchForm form(const Model&) { return {}; }
-};
+struct ContactBatchLaw<ContactModel<HertzRestitutionNormal, CoulombTangential>>
+    : contact_batch_detail::CoulombBatchLaw<HertzRestitutionNormal, BatchLaw::HertzRestitution,
+                                            CoulombTangential::MindlinRestitution> {};
 template <>
-struct ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>> {
-  using Model = ContactModel<HertzNormal, CoulombTangential>;
-  static constexpr bool available = GRANULAR_CONTACT_BATCH;
-  static constexpr BatchLaw law = BatchLaw::Hertz;
+struct ContactBatchLaw<ContactModel<HystereticNormal, CoulombTangential>>
+    : contact_batch_detail::CoulombBatchLaw<HystereticNormal, BatchLaw::Hysteretic,
+                                            CoulombTangential::Constant> {};
+template <>
+struct ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>>
+    : contact_batch_detail::CoulombBatchLaw<HertzNormal, BatchLaw::Hertz,
+                                            CoulombTangential::Constant> {
   // One form for every pair, and a spring whose dashpot scales as its stiffness (the
   // restitution-damped spring belongs to HertzRestitutionNormal).
   static bool usable(const Model& m) {
@@ -166,37 +175,9 @@ struct ContactBatchLaw<ContactModel<HertzNormal, CoulombTangential>> {
         if (m.normal.table.p[a][b].reduced_radius != f.reduced_radius) return false;
     return contact_batch_detail::every_tangential_law(m.tangential, f.tangential);
   }
-  static BatchParams pair(const Model& m, int a, int b) {
-    const HertzNormal::Params& n = m.normal.table.p[a][b];
-    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-    return {n.K, n.G, t.kt, t.gt, t.mu_s, t.mu_d};
-  }
-  static bool uniform(const Model& m) {
-    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
-  }
   static BatchForm form(const Model& m) {
     return {m.normal.table.p[0][0].reduced_radius, m.tangential.table.p[0][0].law};
   }
-};
-
-template <>
-struct ContactBatchLaw<ContactModel<HystereticNormal, CoulombTangential>> {
-  using Model = ContactModel<HystereticNormal, CoulombTangential>;
-  static constexpr bool available = GRANULAR_CONTACT_BATCH;
-  static constexpr BatchLaw law = BatchLaw::Hysteretic;
-  static bool usable(const Model& m) {
-    return !m.coulomb_elastic_normal &&
-           contact_batch_detail::every_tangential_law(m.tangential, CoulombTangential::Constant);
-  }
-  static BatchParams pair(const Model& m, int a, int b) {
-    const HystereticNormal::Params& n = m.normal.table.p[a][b];
-    const CoulombTangential::Params& t = m.tangential.table.p[a][b];
-    return {n.k2, n.gn, t.kt, t.gt, t.mu_s, t.mu_d, n.k1, n.kc};
-  }
-  static bool uniform(const Model& m) {
-    return contact_batch_detail::uniform_pairs<ContactBatchLaw>(m);
-  }
-  static BatchForm form(const Model&) { return {}; }
 };
 
 #if GRANULAR_CONTACT_BATCH
