@@ -30,13 +30,9 @@ std::shared_ptr<const ConfigState> read_start_packing(const SceneFile& scene,
                   "holds a particle of non-positive density");
   return std::make_shared<const ConfigState>(config_from_packing(std::move(h), box));
 }
-}  // namespace
 
-Setup read_setup(const SceneFile& scene) {
-  Setup s;
-  s.start_from = scene.optional_input_path("start.from");
-  if (!s.start_from.empty()) s.start_packing = read_start_packing(scene, s.start_from);
-  s.contact = ContactConfig::read(scene);
+// The time step, skin, damping and the run's limits.
+void read_run(const SceneFile& scene, Setup& s) {
   s.params.dt = scene.real("run.dt");
   scene.require(s.params.dt > 0, "run.dt", "must be positive");
   s.params.dt_key = "run.dt";
@@ -52,6 +48,10 @@ Setup read_setup(const SceneFile& scene) {
   // A negative skin lists no pair (every particle a rattler, no moduli): refused.
   scene.require(s.params.skin > 0 && std::isfinite(s.params.skin), "run.skin",
                 "must be positive and finite");
+}
+
+// How a state is relaxed and which friction the preparation uses.
+void read_relaxation(const SceneFile& scene, Setup& s) {
   s.relax_ratio = scene.real("preparation.relax_ratio", 1e-8);
   s.relax_max = scene.integer("preparation.relax_max_steps", 200000);
   // Read only when present, so that studies checkpointed before the key existed resume.
@@ -65,6 +65,10 @@ Setup read_setup(const SceneFile& scene) {
       scene.real("preparation.jamming_fit_pressure_max", s.contact.normal == "hertz" ? 0.0 : 1e-3);
   scene.require(s.jamming_p_max >= 0, "preparation.jamming_fit_pressure_max",
                 "must not be negative (0: no fit)");
+}
+
+// The probes: amplitude, steps, the sweeps over k_t, amplitudes and pre-strains.
+void read_probe(const SceneFile& scene, Setup& s) {
   s.amplitude = scene.real("probe.amplitude", 3e-6);
   s.strain_steps = scene.integer("probe.strain_steps", 2000);
   s.probe_relax = scene.integer("probe.relax_steps", 2000);
@@ -103,11 +107,10 @@ Setup read_setup(const SceneFile& scene) {
                       s.contact.normal != "hertz",
                   "probe.kt_over_kn",
                   "needs a linear or hysteretic normal law with a constant tangential spring");
-  if (!s.start_from.empty()) {
-    s.variants.push_back({});
-    scene.reject_unknown_keys();
-    return s;
-  }
+}
+
+// The gas and its compression to the target volume fractions.
+void read_gas_preparation(const SceneFile& scene, Setup& s) {
   GasSpec& g = s.gas;
   const long count = scene.integer("particles.count", 0);
   scene.require(count >= 0 && count <= std::numeric_limits<int>::max(), "particles.count",
@@ -144,7 +147,11 @@ Setup read_setup(const SceneFile& scene) {
   scene.require(s.rate > 0, "preparation.volumetric_strain_rate", "must be positive");
   scene.require(s.min_rate > 0 && s.min_rate <= s.rate, "preparation.min_volumetric_strain_rate",
                 "must be in (0, preparation.volumetric_strain_rate]");
-  // Preparation variants: sizes x seeds x friction coefficients.
+}
+
+// Preparation variants: sizes x seeds x friction coefficients x adhesive stiffnesses.
+void read_variants(const SceneFile& scene, Setup& s) {
+  const GasSpec& g = s.gas;
   std::vector<double> counts = scene.reals("ensemble.counts", {});
   std::vector<double> seeds = scene.reals("ensemble.seeds", {});
   const std::vector<double> mus = scene.reals("preparation.mu", {});
@@ -197,6 +204,25 @@ Setup read_setup(const SceneFile& scene) {
           v.tag = buf;
           s.variants.push_back(v);
         }
+}
+
+}  // namespace
+
+Setup read_setup(const SceneFile& scene) {
+  Setup s;
+  s.start_from = scene.optional_input_path("start.from");
+  if (!s.start_from.empty()) s.start_packing = read_start_packing(scene, s.start_from);
+  s.contact = ContactConfig::read(scene);
+  read_run(scene, s);
+  read_relaxation(scene, s);
+  read_probe(scene, s);
+  if (!s.start_from.empty()) {
+    s.variants.push_back({});
+    scene.reject_unknown_keys();
+    return s;
+  }
+  read_gas_preparation(scene, s);
+  read_variants(scene, s);
   scene.reject_unknown_keys();
   return s;
 }

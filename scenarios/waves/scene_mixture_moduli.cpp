@@ -106,8 +106,8 @@ bool listed(const std::vector<double>& list, double v) {
   return std::any_of(list.begin(), list.end(), [v](double x) { return std::fabs(x - v) < 1e-12; });
 }
 
-Setup read_setup(const SceneFile& s) {
-  Setup u;
+// The two materials and the particles: a packing file, or a gas and its soft fractions.
+void read_particles(const SceneFile& s, Setup& u) {
   u.mats = MixtureMaterials::read(s);
   u.stiff = u.mats.slot(s, "mixture.stiff_material", s.text("mixture.stiff_material"));
   u.soft = u.mats.slot(s, "mixture.soft_material", s.text("mixture.soft_material"));
@@ -135,8 +135,12 @@ Setup read_setup(const SceneFile& s) {
     g.phi = s.real("preparation.phi_gas", 0.3);
     check_gas(s, g, "preparation.phi_gas");
   }
+}
+
+// The compression to phi_0 and the pressures of the branch.
+void read_loading(const SceneFile& s, Setup& u) {
   u.phi0 = s.real("preparation.phi_0", 0.55);
-  s.require(u.phi0 > (u.from ? 0.0 : g.phi) && u.phi0 < 0.6, "preparation.phi_0",
+  s.require(u.phi0 > (u.from ? 0.0 : u.gas.phi) && u.phi0 < 0.6, "preparation.phi_0",
             u.from ? "must lie in (0, 0.6) (below frictional jamming)"
                    : "must lie between preparation.phi_gas and 0.6 (below frictional jamming)");
   u.gas_rate = s.real("preparation.gas_strain_rate");
@@ -168,6 +172,10 @@ Setup read_setup(const SceneFile& s) {
                 "must increase (one sample is taken up through them: the loading branch; "
                 "preparation.unload_from takes it down through decreasing ones)");
   }
+}
+
+// The pressure servo.
+void read_servo(const SceneFile& s, Setup& u) {
   ServoSettings& sv = u.servo;
   sv.tolerance = s.real("preparation.tolerance", 0.02);
   sv.ekin_ratio = s.real("preparation.ekin_ratio", 1e-6);
@@ -193,13 +201,19 @@ Setup read_setup(const SceneFile& s) {
             "preparation.integral_crossings", "must be 0 (no integral action) or positive");
   s.require(sv.max_phase_steps >= sv.min_phase_steps, "preparation.max_phase_steps",
             "must be at least 100");
+}
 
+// The damping of the gas and of the servo phases.
+void read_damping(const SceneFile& s, Setup& u) {
   u.gas_damping_time = s.real("damping.gas_time");
   u.damping_crossings = s.real("damping.crossing_fraction", 0.5);
   s.require(u.gas_damping_time > 0, "damping.gas_time", "must be positive");
   s.require(u.damping_crossings > 0 && u.damping_crossings <= 1e3, "damping.crossing_fraction",
             "must lie in (0, 1000] crossing times");
+}
 
+// The probes.
+void read_probe(const SceneFile& s, Setup& u) {
   u.amplitude = s.real("probe.amplitude", 2e-6);
   u.strain_crossings = s.real("probe.strain_crossings", 1.0);
   u.relax_crossings = s.real("probe.relax_crossings", 2.0);
@@ -209,7 +223,10 @@ Setup read_setup(const SceneFile& s) {
   s.require(u.amplitude > 0 && u.amplitude < 1e-3, "probe.amplitude", "must lie in (0, 1e-3)");
   s.require(u.strain_crossings > 0, "probe.strain_crossings", "must be positive");
   s.require(u.relax_crossings >= 0, "probe.relax_crossings", "must not be negative");
+}
 
+// The time step, skin and overlap limit.
+void read_run(const SceneFile& s, Setup& u) {
   u.params.dt = s.real("run.dt");
   u.params.dt_key = "run.dt";
   u.params.skin = s.real("run.skin");
@@ -221,7 +238,10 @@ Setup read_setup(const SceneFile& s) {
   s.require(u.params.skin > 0, "run.skin", "must be positive");
   s.require(u.params.max_overlap > 0 && u.params.max_overlap < 0.5, "run.max_overlap",
             "must lie in (0, 0.5)");
+}
 
+// The run of one fraction under the other pair rule, where the scene asks for it.
+void read_pair_rule_check(const SceneFile& s, Setup& u) {
   u.other_rule = u.mats.pair_rule == "harmonic" ? "product_over_sum" : "harmonic";
   if (s.has("pair_rule_check.soft_volume_fraction") || s.has("pair_rule_check.pressures")) {
     s.require(!u.from, "pair_rule_check.soft_volume_fraction",
@@ -241,8 +261,10 @@ Setup read_setup(const SceneFile& s) {
     // In the order the branch takes them: down from the peak on the unloading branch.
     if (u.unload_from > 0) std::reverse(u.check_pressures.begin(), u.check_pressures.end());
   }
-  s.reject_unknown_keys();
+}
 
+// One variant per soft fraction, and the pair-rule check's.
+void add_variants(Setup& u) {
   for (double f : u.fractions) {
     char tag[64];
     std::snprintf(tag, sizeof tag, "nu%.3f_%s", f, u.mats.pair_rule.c_str());
@@ -253,6 +275,19 @@ Setup read_setup(const SceneFile& s) {
     std::snprintf(tag, sizeof tag, "nu%.3f_%s", u.check_fraction, u.other_rule.c_str());
     u.variants.push_back({u.check_fraction, u.other_rule, u.check_pressures, tag});
   }
+}
+
+Setup read_setup(const SceneFile& s) {
+  Setup u;
+  read_particles(s, u);
+  read_loading(s, u);
+  read_servo(s, u);
+  read_damping(s, u);
+  read_probe(s, u);
+  read_run(s, u);
+  read_pair_rule_check(s, u);
+  s.reject_unknown_keys();
+  add_variants(u);
   return u;
 }
 

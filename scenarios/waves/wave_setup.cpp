@@ -8,10 +8,10 @@
 
 namespace granular {
 
-WaveSetup read_wave_setup(const SceneFile& s) {
-  WaveSetup w;
-  w.mats = MaterialSet::read(s);
-  const bool from = s.has("column.from");
+namespace {
+
+// The mixture of the materials and the walls' material.
+void read_mixture(const SceneFile& s, WaveSetup& w, bool from) {
   if (!from) w.fractions = s.reals("mixture.volume_fractions");
   // The scene reader holds lists of numbers only: the materials are one comma-separated text.
   const std::string list = s.text("mixture.materials");
@@ -44,7 +44,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.wall = w.mats.at(s, "mixture.wall_material");
   s.require(w.mats.materials[w.wall].friction == 0, "mixture.wall_material",
             "must be frictionless (friction = 0): wall contacts start fresh in every run");
+}
 
+// The column: from a file, or a gas of these dimensions.
+void read_column(const SceneFile& s, WaveSetup& w, bool from) {
   if (from) {
     column_from_file(s, w);
   } else {
@@ -61,7 +64,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
     s.require(w.gas_phi > 0.05 && w.gas_phi < 0.45, "column.gas_volume_fraction",
               "must lie in (0.05, 0.45)");
   }
+}
 
+// The servo to each pressure, its relaxations and limits.
+void read_preparation(const SceneFile& s, WaveSetup& w, bool from) {
   w.pressures = s.reals("preparation.pressures");
   s.require(!w.pressures.empty(), "preparation.pressures", "needs at least one pressure");
   for (size_t k = 0; k < w.pressures.size(); ++k)
@@ -95,7 +101,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.tolerance > 0 && w.tolerance < 0.5, "preparation.tolerance", "must lie in (0, 0.5)");
   s.require(w.relax_time > 0, "preparation.relax_time", "must be positive");
   s.require(w.max_time > w.relax_time, "preparation.max_time", "must exceed relax_time");
+}
 
+// The pulse at the driven end and the recording after it.
+void read_pulse(const SceneFile& s, WaveSetup& w) {
   w.shape = s.text("pulse.shape", "raised_cosine");
   s.require(w.shape == "raised_cosine" || w.shape == "ricker", "pulse.shape",
             "must be \"raised_cosine\" or \"ricker\"");
@@ -116,7 +125,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
             "must exceed pre_time + duration");
   s.require(w.sample_every >= 1 && w.sample_every <= 1000000, "pulse.sample_every",
             "must lie in [1, 1e6] steps");
+}
 
+// Where the slabs of particles that pick the signal lie.
+void read_receivers(const SceneFile& s, WaveSetup& w) {
   w.slab_positions = s.reals("receivers.slab_positions");
   w.slab_width = s.real("receivers.slab_width", 2.0);
   for (double x : w.slab_positions)
@@ -125,7 +137,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
     s.require(w.slab_positions[k] > w.slab_positions[k - 1], "receivers.slab_positions",
               "must increase");
   s.require(w.slab_width > 0, "receivers.slab_width", "must be positive");
+}
 
+// The static strain probe of the modulus.
+void read_probe(const SceneFile& s, WaveSetup& w) {
   w.probe_strain = s.real("probe.strain");
   w.probe_ramp = s.real("probe.ramp_time");
   w.probe_hold = s.real("probe.hold_time");
@@ -134,7 +149,10 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   s.require(w.probe_ramp > 0, "probe.ramp_time", "must be positive");
   s.require(w.probe_hold > 0, "probe.hold_time", "must be positive");
   s.require(w.probe_damping_time > 0, "probe.damping_time", "must be positive");
+}
 
+// The time step, the overlap limit, the step and restitution checks.
+void read_run(const SceneFile& s, WaveSetup& w) {
   w.dt = s.real("run.dt");
   w.max_overlap = s.real("run.max_overlap", 0.05);
   w.dt_check = s.reals("run.dt_check", {});
@@ -157,7 +175,21 @@ WaveSetup read_wave_setup(const SceneFile& s) {
   w.restitution_check = s.reals("run.restitution_check", {});
   for (double e : w.restitution_check)
     s.require(e > 0 && e <= 1, "run.restitution_check", "restitutions in (0, 1]");
+}
 
+}  // namespace
+
+WaveSetup read_wave_setup(const SceneFile& s) {
+  WaveSetup w;
+  w.mats = MaterialSet::read(s);
+  const bool from = s.has("column.from");
+  read_mixture(s, w, from);
+  read_column(s, w, from);
+  read_preparation(s, w, from);
+  read_pulse(s, w);
+  read_receivers(s, w);
+  read_probe(s, w);
+  read_run(s, w);
   w.signals = read_signal_settings(s, "analysis", w.pre_time);
   return w;
 }
