@@ -5,6 +5,7 @@
 #pragma once
 #include <Kokkos_Core.hpp>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -643,33 +644,37 @@ class DemSystem {
     }
   }
 
-  // The stiffest, lightest contact that can occur sets the shortest collision; dt must
-  // resolve it. Each species pair that can touch is guarded with its own lightest reduced
-  // mass: a pair needs a particle of each species (two of a species for a like pair), a wall
-  // touches particles only. A pair that cannot occur (a stiff target sphere alone) is not
-  // guarded.
-  void check_time_step() const {
-    if (p_.n < 1 || (p_.n < 2 && walls_.size() == 0)) return;
-    auto mass = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.mass);
-    auto species = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.species);
-    // The two lightest masses of each species (infinity where there are fewer particles).
+  // The two lightest masses of each species (infinity where there are fewer particles).
+  using LightestMasses = std::array<std::array<double, 2>, kMaxSpecies>;
+  template <class MassView, class SpeciesView>
+  LightestMasses lightest_masses(const MassView& mass, const SpeciesView& species) const {
     constexpr double none = std::numeric_limits<double>::infinity();
-    double light[kMaxSpecies][2];
+    LightestMasses light;
     for (auto& l : light) l[0] = l[1] = none;
     for (int i = 0; i < p_.n; ++i) {
-      double* l = light[species(i)];
+      auto& l = light[species(i)];
       if (mass(i) < l[0])
         l[1] = l[0], l[0] = mass(i);
       else if (mass(i) < l[1])
         l[1] = mass(i);
     }
+    return light;
+  }
+
+  // The shortest contact duration of any pair that can occur, with its stiffness and reduced
+  // mass, and the fastest contact dashpot rate.
+  struct ShortestContact {
+    double tc = std::numeric_limits<double>::infinity(), k = 0, m = 0, rate = 0;
+  };
+  ShortestContact shortest_contact(const LightestMasses& light) const {
+    constexpr double none = std::numeric_limits<double>::infinity();
     const double delta_ref = params_.max_overlap * a_min_, length_max = 2 * a_max_;
-    double tc = none, k_worst = 0, m_worst = 0, rate = 0;
+    ShortestContact c;
     auto guard = [&](int a, int b, double m_red) {
       const PairMask pair = PairMask::only(a, b);
       const double t = model_.shortest_duration(m_red, delta_ref, length_max, pair);
-      if (t < tc) tc = t, k_worst = model_.stiffness(delta_ref, length_max, pair), m_worst = m_red;
-      rate = std::max(rate, model_.damping_rate(m_red, delta_ref, length_max, pair));
+      if (t < c.tc) c.tc = t, c.k = model_.stiffness(delta_ref, length_max, pair), c.m = m_red;
+      c.rate = std::max(c.rate, model_.damping_rate(m_red, delta_ref, length_max, pair));
     };
     for (int a = 0; a < kMaxSpecies; ++a)
       for (int b = a; b < kMaxSpecies; ++b) {
@@ -680,35 +685,42 @@ class DemSystem {
     for (const WallSpec& w : walls_.specs())
       for (int a = 0; a < kMaxSpecies; ++a)
         if (light[a][0] < none) guard(a, w.material, light[a][0]);
-    // A multi-contact law stiffens the contacts beyond the pair law (multicontact.hpp).
-    const double stiffer = stiffness_factor(mc_.options(), params_.max_overlap);
-    tc /= std::sqrt(stiffer), k_worst *= stiffer;
-    if (params_.dt > params_.dt_guard * tc) {
-      std::ostringstream msg;
-      msg.precision(4);
-      msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard << " = "
-          << params_.dt_guard * tc << " for the stiffest, lightest contact of the scene (stiffness "
-          << k_worst << ", reduced mass " << m_worst << ", contact duration " << tc;
-      if (stiffer > 1)
-        msg << ", with MC-stress's allowance of " << stiffer
-            << " x the pair law's stiffness for beta = " << mc_.options().beta
-            << " and the overlap limit " << params_.max_overlap;
-      msg << "): ";
-      if (params_.dt_hint.empty())
-        msg << "set " << params_.dt_key << " <= " << params_.dt_guard * tc
-            << " (t_c/50 = " << tc / 50 << " is the usual choice)";
-      else
-        msg << params_.dt_hint;
-      // A law whose stiffness grows with the overlap is taken at the overlap limit.
-      if (model_.stiffness(0.25 * delta_ref, length_max) < model_.stiffness(delta_ref, length_max))
-        msg << "; the stiffness is taken at the overlap limit max_overlap = " << params_.max_overlap
-            << " of the smaller radius (a lower limit, where the run's overlaps stay below it, "
-               "bounds it lower)";
-      throw PhysicsError(msg.str());
-    }
-    // Explicit dashpots: a rate gamma/m with gamma dt / m above 1 flips the relative velocity
-    // every step (above 2 it grows): contact dashpots on their pair's mass, the background
-    // and rotational damping on the lightest particle's mass and moment of inertia.
+    return c;
+  }
+
+  // The refusal of a time step above dt_guard t_c, saying what to change.
+  [[noreturn]] void refuse_time_step(const ShortestContact& c, double stiffer) const {
+    const double tc = c.tc;
+    std::ostringstream msg;
+    msg.precision(4);
+    msg << "time step dt = " << params_.dt << " exceeds t_c/" << 1.0 / params_.dt_guard << " = "
+        << params_.dt_guard * tc << " for the stiffest, lightest contact of the scene (stiffness "
+        << c.k << ", reduced mass " << c.m << ", contact duration " << tc;
+    if (stiffer > 1)
+      msg << ", with MC-stress's allowance of " << stiffer
+          << " x the pair law's stiffness for beta = " << mc_.options().beta
+          << " and the overlap limit " << params_.max_overlap;
+    msg << "): ";
+    if (params_.dt_hint.empty())
+      msg << "set " << params_.dt_key << " <= " << params_.dt_guard * tc << " (t_c/50 = " << tc / 50
+          << " is the usual choice)";
+    else
+      msg << params_.dt_hint;
+    // A law whose stiffness grows with the overlap is taken at the overlap limit.
+    const double delta_ref = params_.max_overlap * a_min_, length_max = 2 * a_max_;
+    if (model_.stiffness(0.25 * delta_ref, length_max) < model_.stiffness(delta_ref, length_max))
+      msg << "; the stiffness is taken at the overlap limit max_overlap = " << params_.max_overlap
+          << " of the smaller radius (a lower limit, where the run's overlaps stay below it, "
+             "bounds it lower)";
+    throw PhysicsError(msg.str());
+  }
+
+  // Explicit dashpots: a rate gamma/m with gamma dt / m above 1 flips the relative velocity
+  // every step (above 2 it grows): contact dashpots on their pair's mass, the background
+  // and rotational damping on the lightest particle's mass and moment of inertia.
+  template <class MassView>
+  void check_damping_rates(double contact_rate, const MassView& mass) const {
+    constexpr double none = std::numeric_limits<double>::infinity();
     auto refuse = [&](const std::string& what, double value, const std::string& change) {
       std::ostringstream msg;
       msg.precision(4);
@@ -717,9 +729,9 @@ class DemSystem {
           << change;
       throw PhysicsError(msg.str());
     };
-    if (rate * params_.dt > 1)
-      refuse("the fastest contact dashpot rate gamma/m = " + std::to_string(rate),
-             rate * params_.dt,
+    if (contact_rate * params_.dt > 1)
+      refuse("the fastest contact dashpot rate gamma/m = " + std::to_string(contact_rate),
+             contact_rate * params_.dt,
              "lower the contact's damping (gamma_n, gamma_t) or " + params_.dt_key);
     auto inertia = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.inertia);
     double m_min = none, i_min = none;
@@ -733,6 +745,23 @@ class DemSystem {
       refuse("the rotational damping over the smallest moment of inertia",
              params_.damping.rotational * params_.dt / i_min,
              "lower the rotational damping (damping.rotational) or " + params_.dt_key);
+  }
+
+  // The stiffest, lightest contact that can occur sets the shortest collision; dt must
+  // resolve it. Each species pair that can touch is guarded with its own lightest reduced
+  // mass: a pair needs a particle of each species (two of a species for a like pair), a wall
+  // touches particles only. A pair that cannot occur (a stiff target sphere alone) is not
+  // guarded.
+  void check_time_step() const {
+    if (p_.n < 1 || (p_.n < 2 && walls_.size() == 0)) return;
+    auto mass = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.mass);
+    auto species = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p_.species);
+    ShortestContact c = shortest_contact(lightest_masses(mass, species));
+    // A multi-contact law stiffens the contacts beyond the pair law (multicontact.hpp).
+    const double stiffer = stiffness_factor(mc_.options(), params_.max_overlap);
+    c.tc /= std::sqrt(stiffer), c.k *= stiffer;
+    if (params_.dt > params_.dt_guard * c.tc) refuse_time_step(c, stiffer);
+    check_damping_rates(c.rate, mass);
   }
 
   Particles<ExecSpace> p_;

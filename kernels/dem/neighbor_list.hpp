@@ -353,6 +353,17 @@ class NeighborList {
 
   // Public only because nvcc rejects extended lambdas in private member functions.
   void index_pairs(int n);
+  // The stages of bin(): the largest radius, the cell grid (nc cells of cell_len along each
+  // axis) and its arrays, the cells' order, the particles binned and sorted by identity in
+  // each cell, and the slabs' first entries.
+  double max_radius(const Particles<ExecSpace>& p) const;
+  void cell_grid(const PeriodicBox& box, double rc, int nc[3], double cell_len[3]) const;
+  void size_cells(const int nc[3], bool periodic_z, int n);
+  void rank_cells(const int nc[3]);
+  void fill_cells(const Particles<ExecSpace>& p, const PeriodicBox& box, const int nc[3],
+                  const double cell_len[3]);
+  void sort_cells(const Particles<ExecSpace>& p, int ncells);
+  void mark_slabs(const int nc[3]);
   void relabel_cells(int n);
   void build_mirror(int n);
   void build_pair_index(int n);
@@ -379,22 +390,35 @@ class NeighborList {
 
 template <class ExecSpace>
 void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicBox& box) {
-  const int n = p.n;
-  auto radius = p.radius;
-  auto x = p.x;
-
-  double a_max = 0.0;
-  Kokkos::parallel_reduce(
-      "neighbor::NeighborList::max_radius", Kokkos::RangePolicy<ExecSpace>(0, n),
-      KOKKOS_LAMBDA(const int i, double& m) { m = radius(i) > m ? radius(i) : m; },
-      Kokkos::Max<double>(a_max));
-  a_max_ = a_max;
-  const double rc = 2.0 * a_max + skin_;
-
-  // Cell grid: cells no smaller than the cutoff. The minimum image is unique only when
-  // the box is at least twice the cutoff.
+  a_max_ = max_radius(p);
+  const double rc = 2.0 * a_max_ + skin_;
   int nc[3];
   double cell_len[3];
+  cell_grid(box, rc, nc, cell_len);
+  size_cells(nc, box.periodic[2], p.n);
+  rank_cells(nc);
+  fill_cells(p, box, nc, cell_len);
+  sort_cells(p, nc[0] * nc[1] * nc[2]);
+  for (int d = 0; d < 3; ++d) nc_[d] = nc[d];
+  mark_slabs(nc);
+}
+
+template <class ExecSpace>
+double NeighborList<ExecSpace>::max_radius(const Particles<ExecSpace>& p) const {
+  auto radius = p.radius;
+  double a_max = 0.0;
+  Kokkos::parallel_reduce(
+      "neighbor::NeighborList::max_radius", Kokkos::RangePolicy<ExecSpace>(0, p.n),
+      KOKKOS_LAMBDA(const int i, double& m) { m = radius(i) > m ? radius(i) : m; },
+      Kokkos::Max<double>(a_max));
+  return a_max;
+}
+
+// Cells no smaller than the cutoff. The minimum image is unique only when the box is at least
+// twice the cutoff.
+template <class ExecSpace>
+void NeighborList<ExecSpace>::cell_grid(const PeriodicBox& box, double rc, int nc[3],
+                                        double cell_len[3]) const {
   for (int d = 0; d < 3; ++d) {
     // A collapsed or diverged box is not a size problem: "more particles" would be the wrong
     // advice, and a non-finite edge would reach the cell count as NaN cast to an integer.
@@ -416,6 +440,13 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
     nc[d] = std::max(1, static_cast<int>(std::floor(box.len[d] / rc)));
     cell_len[d] = box.len[d] / nc[d];
   }
+}
+
+// The cell arrays for this grid and n particles, and the slabs of whole cell layers along z
+// (see slab_begin()). On a periodic axis the first and last slabs are neighbours, so the count
+// must be a multiple of 3 for the three rounds.
+template <class ExecSpace>
+void NeighborList<ExecSpace>::size_cells(const int nc[3], bool periodic_z, int n) {
   const int ncells = nc[0] * nc[1] * nc[2];
   if (static_cast<int>(cell_count_.extent(0)) != ncells) {
     cell_count_ = int_view("neighbor::cell_count", ncells);
@@ -429,24 +460,21 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
     owned_end_ = int_view("neighbor::owned_end", n);
     x_ref_ = typename Particles<ExecSpace>::vec_view("neighbor::x_ref", n);
   }
-  auto cell_of = cell_of_, cell_start = cell_start_, cell_count = cell_count_;
-  auto cell_particles = cell_particles_, cell_rank = cell_rank_;
-  const PeriodicBox b = box;
-  const int ncx = nc[0], ncy = nc[1], ncz = nc[2];
-  const double clx = cell_len[0], cly = cell_len[1], clz = cell_len[2];
-  // Slabs of whole cell layers along z (see slab_begin()). On a periodic axis the first and
-  // last slabs are neighbours, so the count must be a multiple of 3 for the three rounds.
-  const int layers = nc[2];
-  const int slabs = slab_count(layers, b.periodic[2], slabs_wanted_);
+  const int slabs = slab_count(nc[2], periodic_z, slabs_wanted_);
   if (static_cast<int>(slab_begin_.extent(0)) != slabs + 1)
     slab_begin_ = int_view("neighbor::slab_begin", slabs + 1);
   num_slabs_ = slabs;
-  // Cell order: slab by slab; inside a slab, blocks of `by` cell rows along y, each block
-  // swept in z, y, x order. A partner then lies a few blocks' worth of cells away in memory,
-  // not a whole layer: the sweep's working set fits the core's own cache.
-  const int by = block_rows_;
+}
+
+// Cell order: slab by slab; inside a slab, blocks of `by` cell rows along y, each block swept
+// in z, y, x order. A partner then lies a few blocks' worth of cells away in memory, not a
+// whole layer: the sweep's working set fits the core's own cache.
+template <class ExecSpace>
+void NeighborList<ExecSpace>::rank_cells(const int nc[3]) {
+  auto cell_rank = cell_rank_;
+  const int ncx = nc[0], ncy = nc[1], layers = nc[2], slabs = num_slabs_, by = block_rows_;
   Kokkos::parallel_for(
-      "neighbor::NeighborList::cell_rank", Kokkos::RangePolicy<ExecSpace>(0, ncells),
+      "neighbor::NeighborList::cell_rank", Kokkos::RangePolicy<ExecSpace>(0, ncx * ncy * layers),
       KOKKOS_LAMBDA(const int c) {
         const int cx = c % ncx, cy = (c / ncx) % ncy, cz = c / (ncx * ncy);
         // Slab s holds layers s * layers / slabs .. (s + 1) * layers / slabs - 1.
@@ -457,10 +485,22 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
         const int h = ncy - y0 < by ? ncy - y0 : by;
         cell_rank(c) = (z0 * ncy + y0 * (z1 - z0) + (cz - z0) * h + (cy - y0)) * ncx + cx;
       });
+}
 
+// Each particle's cell, the cells' counts and starts, and the particles cell by cell (in an
+// order that depends on thread timing until sort_cells).
+template <class ExecSpace>
+void NeighborList<ExecSpace>::fill_cells(const Particles<ExecSpace>& p, const PeriodicBox& box,
+                                         const int nc[3], const double cell_len[3]) {
+  auto x = p.x;
+  auto cell_of = cell_of_, cell_start = cell_start_, cell_count = cell_count_;
+  auto cell_particles = cell_particles_, cell_rank = cell_rank_;
+  const PeriodicBox b = box;
+  const int ncx = nc[0], ncy = nc[1], ncz = nc[2], ncells = ncx * ncy * ncz;
+  const double clx = cell_len[0], cly = cell_len[1], clz = cell_len[2];
   Kokkos::deep_copy(cell_count, 0);
   Kokkos::parallel_for(
-      "neighbor::NeighborList::bin", Kokkos::RangePolicy<ExecSpace>(0, n),
+      "neighbor::NeighborList::bin", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
         int cx = static_cast<int>((x(i, 0) - b.lo[0]) / clx);
         int cy = static_cast<int>((x(i, 1) - b.lo[1]) / cly);
@@ -480,16 +520,21 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
       });
   Kokkos::deep_copy(cell_count, 0);
   Kokkos::parallel_for(
-      "neighbor::NeighborList::fill_cells", Kokkos::RangePolicy<ExecSpace>(0, n),
+      "neighbor::NeighborList::fill_cells", Kokkos::RangePolicy<ExecSpace>(0, p.n),
       KOKKOS_LAMBDA(const int i) {
         const int c = cell_rank(cell_of(i));
         const int slot = Kokkos::atomic_fetch_add(&cell_count(c), 1);
         cell_particles(cell_start(c) + slot) = i;
       });
-  // The atomic fill order depends on thread timing; sorting each cell by particle identity
-  // restores a fixed order that depends only on positions and identities (not on the
-  // order particles happen to have in memory, so a restart reproduces it).
+}
+
+// The atomic fill order depends on thread timing; sorting each cell by particle identity
+// restores a fixed order that depends only on positions and identities (not on the order
+// particles happen to have in memory, so a restart reproduces it).
+template <class ExecSpace>
+void NeighborList<ExecSpace>::sort_cells(const Particles<ExecSpace>& p, int ncells) {
   auto id = p.id;
+  auto cell_start = cell_start_, cell_particles = cell_particles_;
   Kokkos::parallel_for(
       "neighbor::NeighborList::sort_cells", Kokkos::RangePolicy<ExecSpace>(0, ncells),
       KOKKOS_LAMBDA(const int c) {
@@ -505,11 +550,13 @@ void NeighborList<ExecSpace>::bin(const Particles<ExecSpace>& p, const PeriodicB
           cell_particles(k + 1) = v;
         }
       });
+}
 
-  for (int d = 0; d < 3; ++d) nc_[d] = nc[d];
-
-  auto slab_begin = slab_begin_;
-  const int cells_per_layer = ncx * ncy;
+// Where each slab's particles begin in the cell order.
+template <class ExecSpace>
+void NeighborList<ExecSpace>::mark_slabs(const int nc[3]) {
+  auto slab_begin = slab_begin_, cell_start = cell_start_;
+  const int cells_per_layer = nc[0] * nc[1], layers = nc[2], slabs = num_slabs_;
   Kokkos::parallel_for(
       "neighbor::NeighborList::slabs", Kokkos::RangePolicy<ExecSpace>(0, slabs + 1),
       KOKKOS_LAMBDA(const int s) {
