@@ -76,40 +76,40 @@ double LammpsForceField::kinetic_energy() const {
   return e * (1.0 / units_.ftm2v);  // mvv2e = 1/ftm2v for every unit style here
 }
 
-void LammpsForceField::compute(bool update) {
-  const int n = size();
-  std::fill(force.begin(), force.end(), 0.0);
-  std::fill(torque.begin(), torque.end(), 0.0);
-  virial.fill(0.0);
-  contacts = 0;
-  // Bins in fractional coordinates, each at least one contact distance thick across:
-  // partners in contact sit in the same or adjacent bins (periodically).
+namespace {
+// Atoms binned in fractional coordinates, each bin at least one contact distance thick across:
+// partners in contact sit in the same or adjacent bins (periodically).
+struct AtomBins {
   int nb[3];
-  for (int d = 0; d < 3; ++d) nb[d] = std::max(1, static_cast<int>(box.width(d) / cut_));
-  const long nbins = static_cast<long>(nb[0]) * nb[1] * nb[2];
-  std::vector<int> bin_of(n);
-  std::vector<long> start(nbins + 1, 0);
-  for (int i = 0; i < n; ++i) {
-    double d[3] = {x[3 * i] - box.lo[0], x[3 * i + 1] - box.lo[1], x[3 * i + 2] - box.lo[2]}, s[3];
-    box.fractional(d, s);
-    int b[3];
-    for (int k = 0; k < 3; ++k) {
-      const double f = s[k] - std::floor(s[k]);
-      b[k] = std::min(nb[k] - 1, static_cast<int>(f * nb[k]));
+  std::vector<int> bin_of, members;  // each atom's bin; the atoms bin by bin
+  std::vector<long> start;           // where each bin's atoms begin in members
+
+  AtomBins(const LammpsBox& box, const std::vector<double>& x, double cut) {
+    const int n = static_cast<int>(x.size() / 3);
+    for (int d = 0; d < 3; ++d) nb[d] = std::max(1, static_cast<int>(box.width(d) / cut));
+    const long nbins = static_cast<long>(nb[0]) * nb[1] * nb[2];
+    bin_of.resize(n);
+    start.assign(nbins + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      double d[3] = {x[3 * i] - box.lo[0], x[3 * i + 1] - box.lo[1], x[3 * i + 2] - box.lo[2]},
+             s[3];
+      box.fractional(d, s);
+      int b[3];
+      for (int k = 0; k < 3; ++k) {
+        const double f = s[k] - std::floor(s[k]);
+        b[k] = std::min(nb[k] - 1, static_cast<int>(f * nb[k]));
+      }
+      bin_of[i] = (b[2] * nb[1] + b[1]) * nb[0] + b[0];
+      ++start[bin_of[i] + 1];
     }
-    bin_of[i] = (b[2] * nb[1] + b[1]) * nb[0] + b[0];
-    ++start[bin_of[i] + 1];
-  }
-  for (long b = 0; b < nbins; ++b) start[b + 1] += start[b];
-  std::vector<int> members(n);
-  {
+    for (long b = 0; b < nbins; ++b) start[b + 1] += start[b];
+    members.resize(n);
     std::vector<long> fill(start.begin(), start.end() - 1);
     for (int i = 0; i < n; ++i) members[fill[bin_of[i]]++] = i;
   }
-  std::unordered_map<std::uint64_t, std::array<double, 3>> next;
-  std::vector<long> near;
-  for (int i = 0; i < n; ++i) {
-    const int b = bin_of[i];
+
+  // Bin b and its neighbours, each once (a box of fewer than three bins across repeats them).
+  void around(int b, std::vector<long>& near) const {
     const int bx = b % nb[0], by = (b / nb[0]) % nb[1], bz = b / (nb[0] * nb[1]);
     near.clear();
     for (int dz = -1; dz <= 1; ++dz)
@@ -121,71 +121,97 @@ void LammpsForceField::compute(bool update) {
         }
     std::sort(near.begin(), near.end());
     near.erase(std::unique(near.begin(), near.end()), near.end());
+  }
+};
+
+// The periodic images of d0 = x_i - x_j around the nearest lattice shift that lie closer than
+// radsum: how many, and (for one) its separation del and squared length rsq.
+int touching_images(const LammpsBox& box, const double d0[3], double radsum, double del[3],
+                    double& rsq) {
+  double s[3];
+  box.fractional(d0, s);
+  double base[3];
+  for (int k = 0; k < 3; ++k) base[k] = std::nearbyint(s[k]);
+  int touching = 0;
+  for (int kc = -1; kc <= 1; ++kc)
+    for (int kb = -1; kb <= 1; ++kb)
+      for (int ka = -1; ka <= 1; ++ka) {
+        const double sh[3] = {base[0] + ka, base[1] + kb, base[2] + kc};
+        double e[3];
+        for (int k = 0; k < 3; ++k)
+          e[k] = d0[k] - (sh[0] * box.edge[0][k] + sh[1] * box.edge[1][k] + sh[2] * box.edge[2][k]);
+        const double r2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        if (r2 < radsum * radsum) {
+          ++touching;
+          for (int k = 0; k < 3; ++k) del[k] = e[k];
+          rsq = r2;
+        }
+      }
+  return touching;
+}
+}  // namespace
+
+void LammpsForceField::compute(bool update) {
+  const int n = size();
+  std::fill(force.begin(), force.end(), 0.0);
+  std::fill(torque.begin(), torque.end(), 0.0);
+  virial.fill(0.0);
+  contacts = 0;
+  const AtomBins bins(box, x, cut_);
+  std::unordered_map<std::uint64_t, std::array<double, 3>> next;
+  std::vector<long> near;
+  for (int i = 0; i < n; ++i) {
+    bins.around(bins.bin_of[i], near);
     for (long c : near)
-      for (long m = start[c]; m < start[c + 1]; ++m) {
-        const int j = members[m];
+      for (long m = bins.start[c]; m < bins.start[c + 1]; ++m) {
+        const int j = bins.members[m];
         if (j <= i) continue;
-        const double radsum = radius[i] + radius[j];
-        double d0[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1],
-                        x[3 * i + 2] - x[3 * j + 2]},
-               s[3];
-        box.fractional(d0, s);
-        double base[3];
-        for (int k = 0; k < 3; ++k) base[k] = std::nearbyint(s[k]);
+        const double d0[3] = {x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1],
+                              x[3 * i + 2] - x[3 * j + 2]};
         // The images around the nearest lattice shift; at most one may touch.
-        int touching = 0;
         double del[3] = {0, 0, 0}, rsq = 0;
-        for (int kc = -1; kc <= 1; ++kc)
-          for (int kb = -1; kb <= 1; ++kb)
-            for (int ka = -1; ka <= 1; ++ka) {
-              const double sh[3] = {base[0] + ka, base[1] + kb, base[2] + kc};
-              double e[3];
-              for (int k = 0; k < 3; ++k)
-                e[k] = d0[k] -
-                       (sh[0] * box.edge[0][k] + sh[1] * box.edge[1][k] + sh[2] * box.edge[2][k]);
-              const double r2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-              if (r2 < radsum * radsum) {
-                ++touching;
-                for (int k = 0; k < 3; ++k) del[k] = e[k];
-                rsq = r2;
-              }
-            }
+        const int touching = touching_images(box, d0, radius[i] + radius[j], del, rsq);
         if (touching == 0) continue;
         if (touching > 1)
           throw InputError("atoms " + std::to_string(id[i]) + " and " + std::to_string(id[j]) +
                            " touch through two periodic images: the box is too small");
-        std::array<double, 3> hist{0, 0, 0};
-        if (model_.history()) {
-          auto it = history_.find(pair_key(i, j));
-          if (it != history_.end()) hist = it->second;
-        }
-        LammpsContactIn in{{del[0], del[1], del[2]},
-                           rsq,
-                           &v[3 * i],
-                           &v[3 * j],
-                           &omega[3 * i],
-                           &omega[3 * j],
-                           radius[i],
-                           radius[j],
-                           mass[i],
-                           mass[j],
-                           type[i],
-                           type[j]};
-        LammpsContactOut out;
-        lammps_contact(model_, in, dt_, update, hist.data(), out);
-        if (model_.history()) next[pair_key(i, j)] = hist;
-        for (int k = 0; k < 3; ++k) {
-          force[3 * i + k] += out.f[k], force[3 * j + k] -= out.f[k];
-          torque[3 * i + k] += out.torque_i[k], torque[3 * j + k] += out.torque_j[k];
-        }
-        virial[0] += del[0] * out.f[0], virial[1] += del[1] * out.f[1];
-        virial[2] += del[2] * out.f[2], virial[3] += del[0] * out.f[1];
-        virial[4] += del[0] * out.f[2], virial[5] += del[1] * out.f[2];
-        ++contacts;
+        add_contact(i, j, del, rsq, update, next);
       }
   }
   // A contact that ended leaves no history behind.
   history_.swap(next);
+}
+
+void LammpsForceField::add_contact(int i, int j, const double del[3], double rsq, bool update,
+                                   std::unordered_map<std::uint64_t, std::array<double, 3>>& next) {
+  std::array<double, 3> hist{0, 0, 0};
+  if (model_.history()) {
+    auto it = history_.find(pair_key(i, j));
+    if (it != history_.end()) hist = it->second;
+  }
+  LammpsContactIn in{{del[0], del[1], del[2]},
+                     rsq,
+                     &v[3 * i],
+                     &v[3 * j],
+                     &omega[3 * i],
+                     &omega[3 * j],
+                     radius[i],
+                     radius[j],
+                     mass[i],
+                     mass[j],
+                     type[i],
+                     type[j]};
+  LammpsContactOut out;
+  lammps_contact(model_, in, dt_, update, hist.data(), out);
+  if (model_.history()) next[pair_key(i, j)] = hist;
+  for (int k = 0; k < 3; ++k) {
+    force[3 * i + k] += out.f[k], force[3 * j + k] -= out.f[k];
+    torque[3 * i + k] += out.torque_i[k], torque[3 * j + k] += out.torque_j[k];
+  }
+  virial[0] += del[0] * out.f[0], virial[1] += del[1] * out.f[1];
+  virial[2] += del[2] * out.f[2], virial[3] += del[0] * out.f[1];
+  virial[4] += del[0] * out.f[2], virial[5] += del[1] * out.f[2];
+  ++contacts;
 }
 
 void LammpsForceField::step() {

@@ -55,6 +55,11 @@ class LammpsForceField {
   double dt_;
   double cut_ = 0;  // largest contact distance, 2 a_max
   std::unordered_map<std::uint64_t, std::array<double, 3>> history_;
+
+  // The force of the contact of atoms i < j at separation del (x_i - x_j of the touching
+  // image), its history carried into `next`.
+  void add_contact(int i, int j, const double del[3], double rsq, bool update,
+                   std::unordered_map<std::uint64_t, std::array<double, 3>>& next);
 };
 
 }  // namespace granular

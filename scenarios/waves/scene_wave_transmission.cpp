@@ -749,6 +749,70 @@ void numerics_checks(const WaveSetup& w, const Prepared& p, const PeriodicBox& b
   }
 }
 
+// One prepared state's probe, pulses and analyses: its row of the summary's table and of the
+// columns of results.h5 (group g of results.h5 holds its signals).
+Json probed_row(const WaveSetup& w, const Prepared& p, const PeriodicBox& box, size_t k,
+                const RunOptions& opts, long snapshot_every, bool with_contacts, H5Writer& h5,
+                StateTable& columns) {
+  const std::string g = "/pressure_" + std::to_string(k);
+  Json row = Json::object();
+  row["sigma_xx"] = p.pressure;
+  row["gap"] = p.gap;
+  row["phi"] = p.phi;
+  row["rho_bulk"] = p.rho_bulk;
+  row["rho_solid"] = p.rho_solid;
+  row["lateral_stress_ratio"] = p.lateral_ratio;
+  row["z"] = p.z;
+  row["max_overlap"] = p.max_overlap;
+  row["preparation_steps"] = p.steps;
+  double m_probe = 0;
+  with_material_model(w.mats, [&](const auto& m) { m_probe = probe_m(m, w, p, box); });
+  row["M_probe"] = m_probe;
+  const Pulses pulses = run_pulses(w, p, box, k, opts, snapshot_every, with_contacts);
+  const double vp_peak = pulses.vp_peak;
+  row["amplitudes"] = pulses.amplitudes;
+  const double fdom_mirrored = write_wall_signals(h5, g, w, p, pulses, row);
+  double q = NAN, qerr = NAN;
+  analyse_slabs(h5, g, w, p, pulses, row, q, qerr);
+  numerics_checks(w, p, box, pulses.ref, row);
+  const double m_wave = p.rho_bulk * vp_peak * vp_peak;
+  // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
+  row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
+  row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
+  // The pulse runs through the load-bearing skeleton, whose density is rho_bulk (1 - f), f
+  // the mass fraction of rattlers peeled below 2 contacts (skeleton.hpp: without gravity a
+  // particle with one contact carries no load). Peeling below 4 takes every particle of
+  // these frictional packings (Z = 4.1-4.3), so 4 is no criterion here.
+  const double f_rattlers = rattler_mass_fraction(p.state, p.xs, box.len[0], 2);
+  Json skeleton = Json::object();
+  skeleton["rattler_mass_fraction"] = f_rattlers;
+  skeleton["M_wave_over_M_probe"] =
+      std::isfinite(m_wave) ? Json(m_wave * (1 - f_rattlers) / m_probe) : Json();
+  row["skeleton"] = skeleton;
+  std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
+            << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
+            << "\n";
+  columns.add(p, vp_peak, m_wave, m_probe, q, qerr, fdom_mirrored);
+  h5.attribute(g, "sigma_xx", p.pressure);
+  h5.attribute(g, "gap", p.gap);
+  return row;
+}
+
+// What the summary says of the column as a whole.
+void describe_column(Json& summary, const WaveSetup& w, const HostParticles& h) {
+  summary["particles"] = h.size();
+  summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
+  summary["pair_rule"] = w.mats.pair_rule;
+  if (w.from) {  // only then, so that the summaries of drawn columns stay as they were
+    summary["start"] = "the packing file of column.from, walls at its particles' extent along x";
+    Json fr = Json::object();
+    for (size_t k = 0; k < w.species.size(); ++k)
+      fr[w.mats.materials[w.species[k]].name] = w.fractions[k];
+    summary["volume_fractions_of_file"] = fr;
+    summary["column_length_diameters"] = w.length;
+  }
+}
+
 }  // namespace
 
 void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
@@ -782,71 +846,21 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   SceneOutput output(scene, opts, "wave_transmission");
   H5Writer& h5 = output.h5();
   Json& summary = output.summary();
-  summary["particles"] = h.size();
-  summary["density_in_M"] = "packing density: total particle mass / volume between the walls";
-  summary["pair_rule"] = w.mats.pair_rule;
-  if (w.from) {  // only then, so that the summaries of drawn columns stay as they were
-    summary["start"] = "the packing file of column.from, walls at its particles' extent along x";
-    Json fr = Json::object();
-    for (size_t k = 0; k < w.species.size(); ++k)
-      fr[w.mats.materials[w.species[k]].name] = w.fractions[k];
-    summary["volume_fractions_of_file"] = fr;
-    summary["column_length_diameters"] = w.length;
-  }
+  describe_column(summary, w, h);
   Json table = Json::array();
   StateTable columns;
   Json unconverged = Json::array();
   for (size_t k = 0; k < states.size(); ++k) {
     const Prepared& p = states[k];
-    const std::string g = "/pressure_" + std::to_string(k);
-    if (!p.converged) {  // not probed, no pulse: its row says where the servo stopped
-      table.push(unconverged_row(p));
-      unconverged.push(unconverged_entry(k, p));
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      columns.add(p, nan, nan, nan, nan, nan, nan);
+    if (p.converged) {
+      table.push(probed_row(w, p, box, k, opts, snapshot_every, with_contacts, h5, columns));
       continue;
     }
-    Json row = Json::object();
-    row["sigma_xx"] = p.pressure;
-    row["gap"] = p.gap;
-    row["phi"] = p.phi;
-    row["rho_bulk"] = p.rho_bulk;
-    row["rho_solid"] = p.rho_solid;
-    row["lateral_stress_ratio"] = p.lateral_ratio;
-    row["z"] = p.z;
-    row["max_overlap"] = p.max_overlap;
-    row["preparation_steps"] = p.steps;
-    double m_probe = 0;
-    with_material_model(w.mats, [&](const auto& m) { m_probe = probe_m(m, w, p, box); });
-    row["M_probe"] = m_probe;
-    const Pulses pulses = run_pulses(w, p, box, k, opts, snapshot_every, with_contacts);
-    const double vp_peak = pulses.vp_peak;
-    row["amplitudes"] = pulses.amplitudes;
-    const double fdom_mirrored = write_wall_signals(h5, g, w, p, pulses, row);
-    double q = NAN, qerr = NAN;
-    analyse_slabs(h5, g, w, p, pulses, row, q, qerr);
-    numerics_checks(w, p, box, pulses.ref, row);
-    const double m_wave = p.rho_bulk * vp_peak * vp_peak;
-    // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
-    row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
-    row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
-    // The pulse runs through the load-bearing skeleton, whose density is rho_bulk (1 - f), f
-    // the mass fraction of rattlers peeled below 2 contacts (skeleton.hpp: without gravity a
-    // particle with one contact carries no load). Peeling below 4 takes every particle of
-    // these frictional packings (Z = 4.1-4.3), so 4 is no criterion here.
-    const double f_rattlers = rattler_mass_fraction(p.state, p.xs, box.len[0], 2);
-    Json skeleton = Json::object();
-    skeleton["rattler_mass_fraction"] = f_rattlers;
-    skeleton["M_wave_over_M_probe"] =
-        std::isfinite(m_wave) ? Json(m_wave * (1 - f_rattlers) / m_probe) : Json();
-    row["skeleton"] = skeleton;
-    std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
-              << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
-              << "\n";
-    table.push(row);
-    columns.add(p, vp_peak, m_wave, m_probe, q, qerr, fdom_mirrored);
-    h5.attribute(g, "sigma_xx", p.pressure);
-    h5.attribute(g, "gap", p.gap);
+    // Not probed, no pulse: its row says where the servo stopped.
+    table.push(unconverged_row(p));
+    unconverged.push(unconverged_entry(k, p));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    columns.add(p, nan, nan, nan, nan, nan, nan);
   }
   summary["states"] = table;
   // Targets the servo did not reach within preparation.max_time (preparation.unconverged).
