@@ -3,12 +3,16 @@
 // torques and the pair virial at step 0 and after velocity-Verlet steps, as HDF5 and as a
 // LAMMPS dump file (`dump custom` with id type xu yu zu vx vy vz omegax omegay omegaz fx fy fz
 // tqx tqy tqz), so that a deck's output can be compared line by line and LAMMPS reads it.
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -22,20 +26,40 @@ namespace granular {
 
 namespace {
 
+// One recorded state of the atoms: what results.h5, a dump file and the summary keep of a step.
+struct LammpsState {
+  long step = 0, contacts = 0;
+  double kinetic_energy = 0;
+  std::vector<double> x, v, omega, force, torque;  // 3 per atom
+  std::array<double, 6> virial{};
+};
+
+// A run of the deck as data: the atoms, the box and each recorded state.
+struct LammpsRun {
+  std::vector<long> id;
+  std::vector<int> type;
+  LammpsBox box;
+  std::vector<LammpsState> states;
+  // What stopped the steps (a non-finite force, atoms the time step moved too far), raised
+  // once the states before it are written: their dump files show where the atoms went.
+  std::exception_ptr stopped;
+  int size() const { return static_cast<int>(id.size()); }
+};
+
 // A LAMMPS dump frame of the atoms (`dump custom` columns, positions unwrapped).
-std::string dump_text(const LammpsForceField& ff) {
+std::string dump_text(const LammpsRun& run, const LammpsState& s) {
   LammpsDumpFrame f;
-  f.step = ff.steps_done;
-  const LammpsBox& b = ff.box;
+  f.step = s.step;
+  const LammpsBox& b = run.box;
   for (int d = 0; d < 3; ++d) f.lo[d] = b.lo[d], f.len[d] = b.edge[d][d];
   f.tilt[0] = b.edge[1][0], f.tilt[1] = b.edge[2][0], f.tilt[2] = b.edge[2][1];
   f.triclinic = f.tilt[0] != 0 || f.tilt[1] != 0 || f.tilt[2] != 0;
   f.columns = {"id",     "type",   "xu", "yu", "zu", "vx",  "vy",  "vz", "omegax",
                "omegay", "omegaz", "fx", "fy", "fz", "tqx", "tqy", "tqz"};
-  for (int i = 0; i < ff.size(); ++i) {
-    f.values.push_back(static_cast<double>(ff.id[i]));
-    f.values.push_back(ff.type[i]);
-    for (const std::vector<double>* a : {&ff.x, &ff.v, &ff.omega, &ff.force, &ff.torque})
+  for (int i = 0; i < run.size(); ++i) {
+    f.values.push_back(static_cast<double>(run.id[i]));
+    f.values.push_back(run.type[i]);
+    for (const std::vector<double>* a : {&s.x, &s.v, &s.omega, &s.force, &s.torque})
       for (int k = 0; k < 3; ++k) f.values.push_back((*a)[3 * i + k]);
   }
   return lammps_dump_text(f);
@@ -52,13 +76,13 @@ void check_finite(const LammpsForceField& ff) {
                            "lammps.timestep or check the pair coefficients");
 }
 
-Json state_json(const LammpsForceField& ff, double nktv2p) {
+Json state_json(const LammpsState& st, double volume, double nktv2p) {
   Json s = Json::object();
-  s["step"] = ff.steps_done;
-  s["contacts"] = ff.contacts;
-  s["kinetic_energy"] = ff.kinetic_energy();
+  s["step"] = st.step;
+  s["contacts"] = st.contacts;
+  s["kinetic_energy"] = st.kinetic_energy;
   Json w = Json::array(), p = Json::array();
-  for (double c : ff.virial) w.push(c), p.push(c / ff.box.volume() * nktv2p);
+  for (double c : st.virial) w.push(c), p.push(c / volume * nktv2p);
   s["pair_virial"] = w;           // xx yy zz xy xz yz
   s["pair_pressure_tensor"] = p;  // as LAMMPS' compute pressure ... pair
   return s;
@@ -92,99 +116,130 @@ StyleUnits style_units(const std::string& style) {
   return {"1", "1", "1", "1", "1", "1", "1"};
 }
 
-void write_state(H5Writer& h5, const LammpsForceField& ff, const LammpsUnits& units) {
+void write_state(H5Writer& h5, const LammpsRun& run, const LammpsState& s,
+                 const LammpsUnits& units) {
   const StyleUnits u = style_units(units.style);
   const double nktv2p = units.nktv2p;
-  const std::string g = "/step_" + std::to_string(ff.steps_done);
-  std::vector<double> ids(ff.id.begin(), ff.id.end());
-  const std::vector<hsize_t> dims = {static_cast<hsize_t>(ff.size()), 3};
+  const std::string g = "/step_" + std::to_string(s.step);
+  std::vector<double> ids(run.id.begin(), run.id.end());
+  const std::vector<hsize_t> dims = {static_cast<hsize_t>(run.size()), 3};
   write_quantity(h5, g + "/id", ids, "1");
-  write_quantity(h5, g + "/position", ff.x, u.length, dims);
-  write_quantity(h5, g + "/velocity", ff.v, u.velocity, dims);
-  write_quantity(h5, g + "/angular_velocity", ff.omega, u.angular_velocity, dims);
-  write_quantity(h5, g + "/force", ff.force, u.force, dims);
-  write_quantity(h5, g + "/torque", ff.torque, u.torque, dims);
-  std::vector<double> w(ff.virial.begin(), ff.virial.end()), p;
-  for (double c : ff.virial) p.push_back(c / ff.box.volume() * nktv2p);
+  write_quantity(h5, g + "/position", s.x, u.length, dims);
+  write_quantity(h5, g + "/velocity", s.v, u.velocity, dims);
+  write_quantity(h5, g + "/angular_velocity", s.omega, u.angular_velocity, dims);
+  write_quantity(h5, g + "/force", s.force, u.force, dims);
+  write_quantity(h5, g + "/torque", s.torque, u.torque, dims);
+  std::vector<double> w(s.virial.begin(), s.virial.end()), p;
+  for (double c : s.virial) p.push_back(c / run.box.volume() * nktv2p);
   write_quantity(h5, g + "/pair_virial", w, u.energy);
   write_quantity(h5, g + "/pair_pressure_tensor", p, u.pressure);
-  h5.attribute(g, "contacts", static_cast<double>(ff.contacts));
-  h5.attribute(g, "kinetic_energy", ff.kinetic_energy());
+  h5.attribute(g, "contacts", static_cast<double>(s.contacts));
+  h5.attribute(g, "kinetic_energy", s.kinetic_energy);
 }
 
-}  // namespace
+// The deck read from the scene: its data file, pair style and units, and the run.
+struct LammpsSetup {
+  LammpsUnits units;
+  LammpsData data;
+  LammpsPairModel model;
+  std::unique_ptr<LammpsForceField> field;
+  long steps = 0, every = 0;
+};
 
-void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
+LammpsSetup read_setup(const SceneFile& scene) {
+  LammpsSetup c;
   const std::string data_path = scene.input_path("lammps.data");
-  const LammpsUnits units =
+  c.units =
       scene.choice("lammps.units", "si", [](const std::string& s) { return lammps_units(s); });
   const std::string style = scene.text("lammps.pair_style");
   const std::vector<std::string> coeffs = scene.texts("lammps.pair_coeff");
   const double dt = scene.real("lammps.timestep");
   scene.require(dt > 0, "lammps.timestep", "must be positive");
-  const long steps = scene.integer("run.steps", 0);
-  scene.require(steps >= 0 && steps <= 1000000, "run.steps",
+  c.steps = scene.integer("run.steps", 0);
+  scene.require(c.steps >= 0 && c.steps <= 1000000, "run.steps",
                 "must lie in [0, 1e6]: this scene compares forces over a few steps");
-  const long every = scene.integer("run.output_every", 0);
-  scene.require(every >= 0, "run.output_every", "must not be negative (0: first and last step)");
-  LammpsData data;
+  c.every = scene.integer("run.output_every", 0);
+  scene.require(c.every >= 0, "run.output_every", "must not be negative (0: first and last step)");
   try {
-    data = read_lammps_data(data_path, 1.0, 1.0, 1.0);  // in the file's own units
+    c.data = read_lammps_data(data_path, 1.0, 1.0, 1.0);  // in the file's own units
   } catch (const InputError& e) {
     scene.require(false, "lammps.data", e.what());
   }
-  LammpsPairModel model;
   try {
-    model = parse_lammps_pair(style, coeffs, data.atom_types, units);
+    c.model = parse_lammps_pair(style, coeffs, c.data.atom_types, c.units);
   } catch (const InputError& e) {
     scene.require(false, "lammps.pair_coeff", e.what());
   }
-  std::unique_ptr<LammpsForceField> field;
   try {
-    field = std::make_unique<LammpsForceField>(data, model, units, dt);
+    c.field = std::make_unique<LammpsForceField>(c.data, c.model, c.units, dt);
   } catch (const InputError& e) {
     scene.require(false, "lammps.data", e.what());
   }
   scene.reject_unknown_keys();
-  if (!begin_outputs(opts)) return;
-  LammpsForceField& ff = *field;
+  return c;
+}
 
-  SceneOutput output(scene, opts, "lammps_forces");
-  H5Writer& h5 = output.h5();
-  Json states = Json::array();
+LammpsState state_of(const LammpsForceField& ff) {
+  LammpsState s;
+  s.step = ff.steps_done, s.contacts = ff.contacts;
+  s.kinetic_energy = ff.kinetic_energy();
+  s.x = ff.x, s.v = ff.v, s.omega = ff.omega, s.force = ff.force, s.torque = ff.torque;
+  s.virial = ff.virial;
+  return s;
+}
+
+// LAMMPS' setup (forces of the initial state, history not advanced), then the steps: the
+// states at step 0, every `every` steps and at the last.
+LammpsRun run_deck(LammpsForceField& ff, const LammpsSetup& c, const std::string& scene_path,
+                   bool progress) {
+  LammpsRun run;
+  run.id = ff.id, run.type = ff.type, run.box = ff.box;
   auto record = [&] {
     check_finite(ff);
-    write_state(h5, ff, units);
-    states.push(state_json(ff, units.nktv2p));
-    write_text_file(opts.out_dir + "/forces_step_" + std::to_string(ff.steps_done) + ".lammpstrj",
-                    dump_text(ff));
-    if (opts.progress)
-      std::cerr << "lammps_forces: step " << ff.steps_done << " of " << steps << ", " << ff.contacts
-                << " contacts\n";
+    run.states.push_back(state_of(ff));
+    if (progress)
+      std::cerr << "lammps_forces: step " << ff.steps_done << " of " << c.steps << ", "
+                << ff.contacts << " contacts\n";
   };
-  // A refusal during the steps comes from where the atoms went: the time step moved them.
-  auto stepped = [&](auto&& work) {
-    try {
-      work();
-    } catch (const InputError& e) {
-      throw PhysicsError(std::string(e.what()) + " at step " + std::to_string(ff.steps_done) +
-                         ": lower lammps.timestep (" + scene.path() + ")");
+  try {
+    ff.compute(false);
+    record();
+    for (long s = 1; s <= c.steps; ++s) {
+      try {
+        ff.step();
+      } catch (const InputError& e) {  // from where the atoms went: the time step moved them
+        throw PhysicsError(std::string(e.what()) + " at step " + std::to_string(ff.steps_done) +
+                           ": lower lammps.timestep (" + scene_path + ")");
+      }
+      if (s == c.steps || (c.every > 0 && s % c.every == 0)) record();
     }
-  };
-  ff.compute(false);  // LAMMPS' setup: forces of the initial state, history not advanced
-  record();
-  for (long s = 1; s <= steps; ++s) {
-    stepped([&] { ff.step(); });
-    if (s == steps || (every > 0 && s % every == 0)) record();
+  } catch (...) {
+    run.stopped = std::current_exception();
   }
-  h5.attribute("/", "atoms", static_cast<double>(ff.size()));
-  h5.attribute("/", "volume", ff.box.volume());
-  h5.attribute("/", "pair_style", model.describe());
+  return run;
+}
+
+// Each state (results.h5, a dump file forces_step_<n>.lammpstrj and the summary), the atoms
+// and the choices of the formulas.
+void write_run(SceneOutput& output, const RunOptions& opts, const LammpsSetup& c,
+               const LammpsRun& run) {
+  H5Writer& h5 = output.h5();
+  Json states = Json::array();
+  for (const LammpsState& s : run.states) {
+    write_state(h5, run, s, c.units);
+    states.push(state_json(s, run.box.volume(), c.units.nktv2p));
+    write_text_file(opts.out_dir + "/forces_step_" + std::to_string(s.step) + ".lammpstrj",
+                    dump_text(run, s));
+  }
+  if (run.stopped) std::rethrow_exception(run.stopped);
+  h5.attribute("/", "atoms", static_cast<double>(run.size()));
+  h5.attribute("/", "volume", run.box.volume());
+  h5.attribute("/", "pair_style", c.model.describe());
 
   Json& summary = output.summary();
   Json choices = Json::object();
-  choices["pair_style"] = model.describe();
-  choices["box"] = data.triclinic() ? "triclinic" : "orthogonal";
+  choices["pair_style"] = c.model.describe();
+  choices["box"] = c.data.triclinic() ? "triclinic" : "orthogonal";
   choices["conventions"] =
       "LAMMPS' own formulas (the version Debian 12 ships): gran/* styles take the contact point "
       "at the particle surfaces and project the shear history after advancing it; granular "
@@ -192,11 +247,20 @@ void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
       "while a run sets up (step 0); fix nve/sphere integration. Contacts are found every "
       "step (no skin).";
   summary["choices"] = choices;
-  summary["atoms"] = ff.size();
+  summary["atoms"] = run.size();
   summary["states"] = states;
+}
+
+}  // namespace
+
+void run_lammps_forces(const SceneFile& scene, const RunOptions& opts) {
+  LammpsSetup c = read_setup(scene);
+  if (!begin_outputs(opts)) return;
+  SceneOutput output(scene, opts, "lammps_forces");
+  write_run(output, opts, c, run_deck(*c.field, c, scene.path(), opts.progress));
   output.finish();
-  std::cout << "lammps_forces: " << ff.size() << " atoms, " << model.describe() << ", " << steps
-            << " steps; outputs in " << opts.out_dir << "\n";
+  std::cout << "lammps_forces: " << c.field->size() << " atoms, " << c.model.describe() << ", "
+            << c.steps << " steps; outputs in " << opts.out_dir << "\n";
 }
 
 }  // namespace granular
