@@ -108,181 +108,236 @@ std::vector<double> parse_list(const std::string& s) {
   return out;
 }
 
+struct Options {
+  int n = 4096;
+  double periods = 100;      // simulated time in units of t_c
+  double v_sigma = 5e-5;     // mm/us = 0.05 m/s per component, as in the peer packings
+  int samples_target = 200;  // energy samples per run
+  std::string cache_dir = "perf_cache", out = "perf/results/dem_energy_vs_dt.json";
+  std::string fractions =
+      "0.005,0.01,0.02,0.03,0.05,0.07,0.1,0.14,0.2,0.25,0.3,0.35,0.4,0.45,0.5,0.55,0.6,0.65,"
+      "0.7,0.8";
+};
+
+// The options in order; a malformed value throws. Returns false on an unknown option (named
+// on stderr); Kokkos' own options are left to Kokkos.
+bool parse_options(int argc, char** argv, Options& o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
+      return argv[++i];
+    };
+    if (a == "--n")
+      o.n = std::stoi(next());
+    else if (a == "--periods")
+      o.periods = std::stod(next());
+    else if (a == "--fractions")
+      o.fractions = next();
+    else if (a == "--cache")
+      o.cache_dir = next();
+    else if (a == "--out")
+      o.out = next();
+    else if (a == "--samples")
+      o.samples_target = std::stoi(next());
+    else if (a.rfind("--kokkos", 0) != 0) {
+      std::cerr << "unknown option " << a << "\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+// The throughput benchmark's dense packing with Gaussian velocities of zero net momentum.
+HostParticles initial_state(const Options& o, PeriodicBox& box) {
+  HostParticles host = perf::dense_packing(o.n, box, o.cache_dir);
+  const int n = host.size();
+  for (int i = 0; i < n; ++i) {
+    Stream s(12345, static_cast<std::uint64_t>(i));
+    host.vx[i] = o.v_sigma * s.normal(), host.vy[i] = o.v_sigma * s.normal(),
+    host.vz[i] = o.v_sigma * s.normal();
+  }
+  double p[3] = {0, 0, 0}, mt = 0;
+  for (int i = 0; i < n; ++i) {
+    const double m = host.density[i] * std::pow(host.radius[i], 3);
+    p[0] += m * host.vx[i], p[1] += m * host.vy[i], p[2] += m * host.vz[i], mt += m;
+  }
+  for (int i = 0; i < n; ++i)
+    host.vx[i] -= p[0] / mt, host.vy[i] -= p[1] / mt, host.vz[i] -= p[2] / mt;
+  return host;
+}
+
+// The time scales of the initial state: t_c of the lightest pair, undamped (pi sqrt(m_red /
+// k)), and the network's largest frequency.
+struct TimeScales {
+  double omega_pair = 0, tc = 0;
+  NetworkFrequency net;
+};
+
+TimeScales time_scales(const HostParticles& host, const PeriodicBox& box) {
+  const int n = host.size();
+  std::vector<double> masses(n);
+  for (int i = 0; i < n; ++i)
+    masses[i] = host.density[i] * 4.0 / 3.0 * M_PI * std::pow(host.radius[i], 3);
+  std::partial_sort(masses.begin(), masses.begin() + 2, masses.end());
+  const double m_red = masses[0] * masses[1] / (masses[0] + masses[1]);
+  TimeScales ts;
+  ts.omega_pair = std::sqrt(kKn / m_red);
+  ts.tc = M_PI / ts.omega_pair;
+  ts.net = network_frequency(host, box);
+  std::cerr << "t_c = " << ts.tc << " us; stability edge dt/t_c: pair "
+            << 2 / (ts.omega_pair * ts.tc) << ", network (power iteration) "
+            << 2 / (ts.net.omega_power * ts.tc) << ", Gershgorin bound "
+            << 2 / (ts.net.omega_gershgorin * ts.tc) << "\n";
+  return ts;
+}
+
+// The result's members ahead of its rows: the set-up, its time scales and the time steps the
+// scenes and benchmarks use, as fractions of t_c.
+Json result_header(const Options& o, int n, const TimeScales& ts) {
+  const double tc = ts.tc;
+  Json result = Json::object();
+  result["benchmark"] = "dem_energy_vs_dt";
+  result["machine"] = perf::machine_info();
+  result["N"] = n;
+  result["physics"] =
+      "frictionless linear spring k_n 1e5 ug/us^2 (1e8 N/m), no dashpot, no background "
+      "damping, velocity Verlet";
+  result["initial_state"] =
+      "dense packing of bench_dem_throughput (phi 0.64, made with mu 0.1) + Gaussian "
+      "velocities 0.05 m/s per component";
+  result["contact_time_us"] = tc;
+  result["simulated_time_us"] = o.periods * tc;
+  result["simulated_time_in_tc"] = o.periods;
+  result["omega_pair_per_us"] = ts.omega_pair;
+  result["omega_max_network_per_us"] = ts.net.omega_power;
+  result["omega_gershgorin_bound_per_us"] = ts.net.omega_gershgorin;
+  result["initial_contacts"] = ts.net.contacts;
+  result["edge_fraction_pair"] = 2 / (ts.omega_pair * tc);
+  result["edge_fraction_network"] = 2 / (ts.net.omega_power * tc);
+  result["edge_fraction_gershgorin"] = 2 / (ts.net.omega_gershgorin * tc);
+  result["engine_guard_fraction"] = DemParams{}.dt_guard;  // the default refuses dt > t_c/10
+  Json defaults = Json::array();
+  Json d = Json::object();
+  d["what"] = "scenes (isotropic_compression, elastic_moduli): dt = 0.004 us";
+  d["dt_us"] = 0.004;
+  d["fraction"] = 0.004 / tc;
+  defaults.push(d);
+  Json e = Json::object();
+  e["what"] = "benchmarks and peer decks: dt = 0.0045 us (t_c/50 of the damped pair)";
+  e["dt_us"] = 0.0045;
+  e["fraction"] = 0.0045 / tc;
+  defaults.push(e);
+  result["default_time_steps"] = defaults;
+  return result;
+}
+
+// One run at a time step: the energy error sampled along it, its extremes and its cost.
+struct EnergyRun {
+  long steps = 0, done = 0;
+  std::vector<double> t_s, e_s;  // time in t_c, relative energy error
+  double wall = 0, e0 = 0, ekin0 = 0, max_err = 0, ekin_max = 0;
+  std::string status = "stable", message;
+};
+
+// Advances the initial state `steps` steps of dt = prm.dt, sampling the energy every `every`
+// steps (the samples untimed); a guard that trips marks the run unstable.
+EnergyRun integrate(const HostParticles& host, const PeriodicBox& box, const DemParams& prm,
+                    long steps, long every, double tc) {
+  const FrictionlessLinear model = frictionless_linear(kKn, 0.0);
+  EnergyRun r;
+  r.steps = steps;
+  try {
+    DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(host), box, model, prm);
+    const Measurements m0 = sys.measure();
+    r.e0 = m0.ekin + m0.epot, r.ekin0 = m0.ekin;
+    r.t_s.push_back(0), r.e_s.push_back(0);
+    while (r.done < steps) {
+      const long k = std::min(every, steps - r.done);
+      Kokkos::fence();
+      Kokkos::Timer timer;
+      sys.step(k);
+      Kokkos::fence();
+      r.wall += timer.seconds();
+      r.done += k;
+      const Measurements m = sys.measure();
+      const double err = (m.ekin + m.epot - r.e0) / r.e0;
+      r.t_s.push_back(sys.time() / tc), r.e_s.push_back(err);
+      if (std::isfinite(err)) r.max_err = std::max(r.max_err, std::abs(err));
+      if (std::isfinite(m.ekin)) r.ekin_max = std::max(r.ekin_max, m.ekin);
+      sys.check_health(m);
+      if (!(std::abs(err) < 1.0)) throw PhysicsError("total energy changed by more than 100 %");
+    }
+  } catch (const PhysicsError& e) {
+    r.status = "unstable";
+    r.message = e.what();
+  }
+  return r;
+}
+
+// The row of a run (and its line on stdout).
+Json row_json(const EnergyRun& r, double f, double dt, int n, double tc) {
+  Json row = Json::object();
+  row["fraction"] = f;
+  row["dt_us"] = dt;
+  row["steps"] = r.steps;
+  row["status"] = r.status;
+  if (!r.message.empty()) row["stopped_by"] = r.message;
+  row["steps_done"] = r.done;
+  row["initial_energy"] = r.e0;
+  row["initial_kinetic_energy"] = r.ekin0;
+  row["max_kinetic_energy"] = r.ekin_max;
+  row["max_relative_energy_error"] = r.max_err;
+  // The same error against the largest kinetic energy of the run (the energy in motion).
+  if (r.ekin_max > 0) row["max_energy_error_over_max_kinetic"] = r.max_err * r.e0 / r.ekin_max;
+  row["final_relative_energy_error"] = r.e_s.back();
+  row["wall_s"] = r.wall;
+  if (r.done > 0) {
+    row["cost_s_per_us_simulated"] = r.wall / (r.done * dt);
+    row["cost_s_per_tc_simulated"] = r.wall / (r.done * dt) * tc;
+    row["particle_steps_per_s"] = static_cast<double>(n) * r.done / r.wall;
+  }
+  row["time_in_tc"] = r.t_s;
+  row["relative_energy_error"] = r.e_s;
+  std::cout << "dt/t_c " << f << ": " << r.status << ", max |dE|/E " << r.max_err << ", " << r.done
+            << "/" << r.steps << " steps, " << r.wall << " s";
+  if (r.done > 0) std::cout << ", " << r.wall / (r.done * dt) * tc << " s per t_c";
+  std::cout << "\n";
+  return row;
+}
+
+// A row per time-step fraction, each run from the same initial state.
+Json run_fractions(const Options& o, const HostParticles& host, const PeriodicBox& box, double tc) {
+  Json rows = Json::array();
+  for (const double f : parse_list(o.fractions)) {
+    DemParams prm = perf::bench_params();
+    prm.dt = f * tc;
+    prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose
+    prm.max_overlap = 0.5;  // runaway-overlap guard, as in the scenes
+    const long steps = std::max(1L, std::lround(o.periods / f));
+    const long every = std::max(1L, steps / o.samples_target);
+    const EnergyRun r = integrate(host, box, prm, steps, every, tc);
+    rows.push(row_json(r, f, prm.dt, host.size(), tc));
+  }
+  return rows;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Kokkos::initialize(argc, argv);
   int rc = 0;
   try {
-    int n = 4096;
-    double periods = 100;      // simulated time in units of t_c
-    double v_sigma = 5e-5;     // mm/us = 0.05 m/s per component, as in the peer packings
-    int samples_target = 200;  // energy samples per run
-    std::string cache_dir = "perf_cache", out = "perf/results/dem_energy_vs_dt.json";
-    std::string fractions =
-        "0.005,0.01,0.02,0.03,0.05,0.07,0.1,0.14,0.2,0.25,0.3,0.35,0.4,0.45,0.5,0.55,0.6,0.65,"
-        "0.7,0.8";
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-        return argv[++i];
-      };
-      if (a == "--n")
-        n = std::stoi(next());
-      else if (a == "--periods")
-        periods = std::stod(next());
-      else if (a == "--fractions")
-        fractions = next();
-      else if (a == "--cache")
-        cache_dir = next();
-      else if (a == "--out")
-        out = next();
-      else if (a == "--samples")
-        samples_target = std::stoi(next());
-      else if (a.rfind("--kokkos", 0) != 0) {
-        std::cerr << "unknown option " << a << "\n";
-        return 2;
-      }
-    }
-
+    Options o;
+    if (!parse_options(argc, argv, o)) return 2;
     PeriodicBox box;
-    HostParticles host = perf::dense_packing(n, box, cache_dir);
-    n = host.size();
-    for (int i = 0; i < n; ++i) {  // Gaussian velocities, zero net momentum
-      Stream s(12345, static_cast<std::uint64_t>(i));
-      host.vx[i] = v_sigma * s.normal(), host.vy[i] = v_sigma * s.normal(),
-      host.vz[i] = v_sigma * s.normal();
-    }
-    {
-      double p[3] = {0, 0, 0}, mt = 0;
-      for (int i = 0; i < n; ++i) {
-        const double m = host.density[i] * std::pow(host.radius[i], 3);
-        p[0] += m * host.vx[i], p[1] += m * host.vy[i], p[2] += m * host.vz[i], mt += m;
-      }
-      for (int i = 0; i < n; ++i)
-        host.vx[i] -= p[0] / mt, host.vy[i] -= p[1] / mt, host.vz[i] -= p[2] / mt;
-    }
-
-    // t_c of the lightest pair, undamped: pi sqrt(m_red / k).
-    std::vector<double> masses(n);
-    for (int i = 0; i < n; ++i)
-      masses[i] = host.density[i] * 4.0 / 3.0 * M_PI * std::pow(host.radius[i], 3);
-    std::partial_sort(masses.begin(), masses.begin() + 2, masses.end());
-    const double m_red = masses[0] * masses[1] / (masses[0] + masses[1]);
-    const double omega_pair = std::sqrt(kKn / m_red);
-    const double tc = M_PI / omega_pair;
-    const NetworkFrequency net = network_frequency(host, box);
-    std::cerr << "t_c = " << tc << " us; stability edge dt/t_c: pair " << 2 / (omega_pair * tc)
-              << ", network (power iteration) " << 2 / (net.omega_power * tc)
-              << ", Gershgorin bound " << 2 / (net.omega_gershgorin * tc) << "\n";
-
-    const FrictionlessLinear model = frictionless_linear(kKn, 0.0);
-    Json result = Json::object();
-    result["benchmark"] = "dem_energy_vs_dt";
-    result["machine"] = perf::machine_info();
-    result["N"] = n;
-    result["physics"] =
-        "frictionless linear spring k_n 1e5 ug/us^2 (1e8 N/m), no dashpot, no background "
-        "damping, velocity Verlet";
-    result["initial_state"] =
-        "dense packing of bench_dem_throughput (phi 0.64, made with mu 0.1) + Gaussian "
-        "velocities 0.05 m/s per component";
-    result["contact_time_us"] = tc;
-    result["simulated_time_us"] = periods * tc;
-    result["simulated_time_in_tc"] = periods;
-    result["omega_pair_per_us"] = omega_pair;
-    result["omega_max_network_per_us"] = net.omega_power;
-    result["omega_gershgorin_bound_per_us"] = net.omega_gershgorin;
-    result["initial_contacts"] = net.contacts;
-    result["edge_fraction_pair"] = 2 / (omega_pair * tc);
-    result["edge_fraction_network"] = 2 / (net.omega_power * tc);
-    result["edge_fraction_gershgorin"] = 2 / (net.omega_gershgorin * tc);
-    result["engine_guard_fraction"] = DemParams{}.dt_guard;  // the default refuses dt > t_c/10
-    Json defaults = Json::array();
-    {
-      Json d = Json::object();
-      d["what"] = "scenes (isotropic_compression, elastic_moduli): dt = 0.004 us";
-      d["dt_us"] = 0.004;
-      d["fraction"] = 0.004 / tc;
-      defaults.push(d);
-      Json e = Json::object();
-      e["what"] = "benchmarks and peer decks: dt = 0.0045 us (t_c/50 of the damped pair)";
-      e["dt_us"] = 0.0045;
-      e["fraction"] = 0.0045 / tc;
-      defaults.push(e);
-    }
-    result["default_time_steps"] = defaults;
-
-    Json rows = Json::array();
-    for (const double f : parse_list(fractions)) {
-      DemParams prm = perf::bench_params();
-      prm.dt = f * tc;
-      prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose
-      prm.max_overlap = 0.5;  // runaway-overlap guard, as in the scenes
-      const long steps = std::max(1L, std::lround(periods / f));
-      const long every = std::max(1L, steps / samples_target);
-      Json row = Json::object();
-      row["fraction"] = f;
-      row["dt_us"] = prm.dt;
-      row["steps"] = steps;
-      std::vector<double> t_s, e_s;
-      double wall = 0, e0 = 0, ekin0 = 0, max_err = 0, ekin_max = 0;
-      std::string status = "stable", message;
-      long done = 0;
-      try {
-        DemSystem<Exec, FrictionlessLinear> sys(Particles<Exec>::from_host(host), box, model, prm);
-        const Measurements m0 = sys.measure();
-        e0 = m0.ekin + m0.epot, ekin0 = m0.ekin;
-        t_s.push_back(0), e_s.push_back(0);
-        while (done < steps) {
-          const long k = std::min(every, steps - done);
-          Kokkos::fence();
-          Kokkos::Timer timer;
-          sys.step(k);
-          Kokkos::fence();
-          wall += timer.seconds();
-          done += k;
-          const Measurements m = sys.measure();
-          const double err = (m.ekin + m.epot - e0) / e0;
-          t_s.push_back(sys.time() / tc), e_s.push_back(err);
-          if (std::isfinite(err)) max_err = std::max(max_err, std::abs(err));
-          if (std::isfinite(m.ekin)) ekin_max = std::max(ekin_max, m.ekin);
-          sys.check_health(m);
-          if (!(std::abs(err) < 1.0)) throw PhysicsError("total energy changed by more than 100 %");
-        }
-      } catch (const PhysicsError& e) {
-        status = "unstable";
-        message = e.what();
-      }
-      row["status"] = status;
-      if (!message.empty()) row["stopped_by"] = message;
-      row["steps_done"] = done;
-      row["initial_energy"] = e0;
-      row["initial_kinetic_energy"] = ekin0;
-      row["max_kinetic_energy"] = ekin_max;
-      row["max_relative_energy_error"] = max_err;
-      // The same error against the largest kinetic energy of the run (the energy in motion).
-      if (ekin_max > 0) row["max_energy_error_over_max_kinetic"] = max_err * e0 / ekin_max;
-      row["final_relative_energy_error"] = e_s.back();
-      row["wall_s"] = wall;
-      if (done > 0) {
-        row["cost_s_per_us_simulated"] = wall / (done * prm.dt);
-        row["cost_s_per_tc_simulated"] = wall / (done * prm.dt) * tc;
-        row["particle_steps_per_s"] = static_cast<double>(n) * done / wall;
-      }
-      row["time_in_tc"] = t_s;
-      row["relative_energy_error"] = e_s;
-      rows.push(row);
-      std::cout << "dt/t_c " << f << ": " << status << ", max |dE|/E " << max_err << ", " << done
-                << "/" << steps << " steps, " << wall << " s";
-      if (done > 0) std::cout << ", " << wall / (done * prm.dt) * tc << " s per t_c";
-      std::cout << "\n";
-    }
-    result["rows"] = rows;
-    std::filesystem::create_directories(std::filesystem::path(out).parent_path());
-    write_text_file(out, result.dump());
-    std::cout << "wrote " << out << "\n";
+    const HostParticles host = initial_state(o, box);
+    const TimeScales ts = time_scales(host, box);
+    Json result = result_header(o, host.size(), ts);
+    result["rows"] = run_fractions(o, host, box, ts.tc);
+    std::filesystem::create_directories(std::filesystem::path(o.out).parent_path());
+    write_text_file(o.out, result.dump());
+    std::cout << "wrote " << o.out << "\n";
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     rc = 1;
