@@ -55,6 +55,107 @@ void finish(BranchError& e) {
   e.rms = e.phi.empty() ? 0.0 : std::sqrt(s2 / e.phi.size());
 }
 
+// C*(nu) fitted on the unloading branch: the branch the probed configurations lie on.
+void fit_coordination(const ModuliData& d, double z_min, ContinuumFit& f) {
+  std::vector<double> x, y;
+  for (size_t i = d.peak; i < d.prep_phi.size(); ++i)
+    if (d.prep_z[i] >= z_min && d.prep_pressure[i] > 0)
+      x.push_back(d.prep_phi[i]), y.push_back(d.prep_z[i]);
+  if (x.size() < 8) throw InputError(d.name + ": too few jammed points on the unloading branch");
+  f.coordination_points = static_cast<int>(x.size());
+  const double phi_low = *std::min_element(x.begin(), x.end());
+  const double z_low = *std::min_element(y.begin(), y.end());
+  auto coordination = [&](const Eigen::VectorXd& p) {
+    Eigen::VectorXd r(x.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+      const double s = std::max(x[i] / p[0] - 1.0, 0.0);
+      r[i] = p[1] + p[2] * std::pow(s, p[3]) - y[i];
+    }
+    return r;
+  };
+  LeastSquaresOptions oc;
+  // nu0 no higher than the loosest jammed point (the law's C* starts there), alpha > 0, and
+  // C0 >= z_min: a jammed packing has at least that many contacts per particle (4 with
+  // infinite friction in 3D). Without it a branch that stays jammed down to its last point
+  // (frictional preparations) trades C0 against nu0 down to C0 = 0, nu0 = 0.58.
+  oc.lower = {0.5, z_min, 0.0, 0.05};
+  oc.upper = {phi_low, 20.0, 200.0, 3.0};
+  f.coordination = levenberg_marquardt(
+      coordination, Eigen::Vector4d(phi_low - 0.01, std::max(z_low, z_min), 10.0, 0.5), oc);
+  ContinuumConstants& c = f.law;
+  c.nu0 = f.coordination.params[0], c.C0 = f.coordination.params[1];
+  c.C1 = f.coordination.params[2], c.alpha = f.coordination.params[3];
+}
+
+// g3 through the origin: F_v = g3 (C* nu) with the measured C* = Z* of each configuration;
+// F_v0 = C0 g3 nu0 derived from it. Returns F_v0's standard error.
+double fit_fabric(const ModuliData& d, ContinuumFit& f) {
+  ContinuumConstants& c = f.law;
+  const int n = static_cast<int>(d.phi.size());
+  Eigen::MatrixXd X(n, 1);
+  Eigen::VectorXd Fv(n);
+  for (int i = 0; i < n; ++i) X(i, 0) = d.z[i] * d.phi[i], Fv[i] = d.fabric[i];
+  f.fabric = linear_least_squares(X, Fv);
+  c.g3 = f.fabric.params[0];
+  c.Fv0 = c.C0 * c.g3 * c.nu0;
+  // Independent-error propagation (the C* and fabric fits use different data).
+  const auto& ec = f.coordination.std_error;
+  const double sFv0 = std::sqrt(std::pow(c.g3 * c.nu0 * ec[1], 2) +
+                                std::pow(c.C0 * c.nu0 * f.fabric.std_error[0], 2) +
+                                std::pow(c.C0 * c.g3 * ec[0], 2));
+  return sFv0;
+}
+
+// K linear in the measured fabric, G a power law in it above F_v0.
+void fit_bulk_and_shear(const ModuliData& d, ContinuumFit& f) {
+  ContinuumConstants& c = f.law;
+  const int n = static_cast<int>(d.phi.size());
+  Eigen::MatrixXd XK(n, 2);
+  Eigen::VectorXd yK(n), yG(n);
+  for (int i = 0; i < n; ++i)
+    XK(i, 0) = 1, XK(i, 1) = d.fabric[i] - c.Fv0, yK[i] = d.K[i], yG[i] = d.G[i];
+  f.bulk = linear_least_squares(XK, yK);
+  c.K0 = f.bulk.params[0], c.K1 = f.bulk.params[1];
+
+  // G: power law in the fabric above F_v0; start from the straight line (G2 = 1).
+  const LeastSquaresFit g_line = linear_least_squares(XK, yG);
+  auto shear = [&](const Eigen::VectorXd& p) {
+    Eigen::VectorXd r(n);
+    for (int i = 0; i < n; ++i) {
+      const double s = std::max(d.fabric[i] - c.Fv0, 0.0);
+      r[i] = p[0] + p[1] * std::pow(s, p[2]) - yG[i];
+    }
+    return r;
+  };
+  LeastSquaresOptions og;
+  og.lower = {-1e12, -1e12, 0.05};
+  og.upper = {1e12, 1e12, 3.0};
+  f.shear =
+      levenberg_marquardt(shear, Eigen::Vector3d(g_line.params[0], g_line.params[1], 1.0), og);
+  c.G0 = f.shear.params[0], c.G1 = f.shear.params[1], c.G2 = f.shear.params[2];
+}
+
+// The constants with their standard errors, units and whether a bound held them.
+std::vector<FittedConstant> constants_table(const ContinuumFit& f, double sFv0) {
+  const ContinuumConstants& c = f.law;
+  const auto& ec = f.coordination.std_error;
+  const auto& cb = f.coordination.at_bound;
+  const auto& gb = f.shear.at_bound;
+  return {
+      {"nu0", c.nu0, ec[0], "-", cb[0]},
+      {"C0", c.C0, ec[1], "-", cb[1]},
+      {"C1", c.C1, ec[2], "-", cb[2]},
+      {"alpha", c.alpha, ec[3], "-", cb[3]},
+      {"g3", c.g3, f.fabric.std_error[0], "-", false},
+      {"Fv0", c.Fv0, sFv0, "- (derived: C0 g3 nu0)", false},
+      {"K0", c.K0, f.bulk.std_error[0], "MPa", false},
+      {"K1", c.K1, f.bulk.std_error[1], "MPa", false},
+      {"G0", c.G0, f.shear.std_error[0], "MPa", gb[0]},
+      {"G1", c.G1, f.shear.std_error[1], "MPa", gb[1]},
+      {"G2", c.G2, f.shear.std_error[2], "-", gb[2]},
+  };
+}
+
 }  // namespace
 
 std::vector<ModuliData> read_moduli_study(const std::string& dir, const std::string& label) {
@@ -103,92 +204,14 @@ std::vector<ModuliData> read_moduli_study(const std::string& dir, const std::str
 ContinuumFit fit_continuum_law(const ModuliData& d, double z_min) {
   ContinuumFit f;
   f.z_min = z_min;
-  // C*(nu) on the unloading branch: the branch the probed configurations lie on.
-  std::vector<double> x, y;
-  for (size_t i = d.peak; i < d.prep_phi.size(); ++i)
-    if (d.prep_z[i] >= z_min && d.prep_pressure[i] > 0)
-      x.push_back(d.prep_phi[i]), y.push_back(d.prep_z[i]);
-  if (x.size() < 8) throw InputError(d.name + ": too few jammed points on the unloading branch");
-  f.coordination_points = static_cast<int>(x.size());
-  const double phi_low = *std::min_element(x.begin(), x.end());
-  const double z_low = *std::min_element(y.begin(), y.end());
-  auto coordination = [&](const Eigen::VectorXd& p) {
-    Eigen::VectorXd r(x.size());
-    for (size_t i = 0; i < x.size(); ++i) {
-      const double s = std::max(x[i] / p[0] - 1.0, 0.0);
-      r[i] = p[1] + p[2] * std::pow(s, p[3]) - y[i];
-    }
-    return r;
-  };
-  LeastSquaresOptions oc;
-  // nu0 no higher than the loosest jammed point (the law's C* starts there), alpha > 0, and
-  // C0 >= z_min: a jammed packing has at least that many contacts per particle (4 with
-  // infinite friction in 3D). Without it a branch that stays jammed down to its last point
-  // (frictional preparations) trades C0 against nu0 down to C0 = 0, nu0 = 0.58.
-  oc.lower = {0.5, z_min, 0.0, 0.05};
-  oc.upper = {phi_low, 20.0, 200.0, 3.0};
-  f.coordination = levenberg_marquardt(
-      coordination, Eigen::Vector4d(phi_low - 0.01, std::max(z_low, z_min), 10.0, 0.5), oc);
+  fit_coordination(d, z_min, f);
+  const double sFv0 = fit_fabric(d, f);
+  fit_bulk_and_shear(d, f);
   ContinuumConstants& c = f.law;
-  c.nu0 = f.coordination.params[0], c.C0 = f.coordination.params[1];
-  c.C1 = f.coordination.params[2], c.alpha = f.coordination.params[3];
-
-  // g3 through the origin: F_v = g3 (C* nu) with the measured C* = Z* of each configuration.
-  const int n = static_cast<int>(d.phi.size());
-  Eigen::MatrixXd X(n, 1);
-  Eigen::VectorXd Fv(n);
-  for (int i = 0; i < n; ++i) X(i, 0) = d.z[i] * d.phi[i], Fv[i] = d.fabric[i];
-  f.fabric = linear_least_squares(X, Fv);
-  c.g3 = f.fabric.params[0];
-  c.Fv0 = c.C0 * c.g3 * c.nu0;
-  // Independent-error propagation (the C* and fabric fits use different data).
-  const auto& ec = f.coordination.std_error;
-  const double sFv0 = std::sqrt(std::pow(c.g3 * c.nu0 * ec[1], 2) +
-                                std::pow(c.C0 * c.nu0 * f.fabric.std_error[0], 2) +
-                                std::pow(c.C0 * c.g3 * ec[0], 2));
-
-  // K linear in the measured fabric.
-  Eigen::MatrixXd XK(n, 2);
-  Eigen::VectorXd yK(n), yG(n);
-  for (int i = 0; i < n; ++i)
-    XK(i, 0) = 1, XK(i, 1) = d.fabric[i] - c.Fv0, yK[i] = d.K[i], yG[i] = d.G[i];
-  f.bulk = linear_least_squares(XK, yK);
-  c.K0 = f.bulk.params[0], c.K1 = f.bulk.params[1];
-
-  // G: power law in the fabric above F_v0; start from the straight line (G2 = 1).
-  const LeastSquaresFit g_line = linear_least_squares(XK, yG);
-  auto shear = [&](const Eigen::VectorXd& p) {
-    Eigen::VectorXd r(n);
-    for (int i = 0; i < n; ++i) {
-      const double s = std::max(d.fabric[i] - c.Fv0, 0.0);
-      r[i] = p[0] + p[1] * std::pow(s, p[2]) - yG[i];
-    }
-    return r;
-  };
-  LeastSquaresOptions og;
-  og.lower = {-1e12, -1e12, 0.05};
-  og.upper = {1e12, 1e12, 3.0};
-  f.shear =
-      levenberg_marquardt(shear, Eigen::Vector3d(g_line.params[0], g_line.params[1], 1.0), og);
-  c.G0 = f.shear.params[0], c.G1 = f.shear.params[1], c.G2 = f.shear.params[2];
   c.units = "MPa (N/mm^2) for K0, K1, G0, G1; K = K* kn_mean / dbar with dbar = " +
             std::to_string(d.d_mean) + " mm";
 
-  const auto& cb = f.coordination.at_bound;
-  const auto& gb = f.shear.at_bound;
-  f.constants = {
-      {"nu0", c.nu0, ec[0], "-", cb[0]},
-      {"C0", c.C0, ec[1], "-", cb[1]},
-      {"C1", c.C1, ec[2], "-", cb[2]},
-      {"alpha", c.alpha, ec[3], "-", cb[3]},
-      {"g3", c.g3, f.fabric.std_error[0], "-", false},
-      {"Fv0", c.Fv0, sFv0, "- (derived: C0 g3 nu0)", false},
-      {"K0", c.K0, f.bulk.std_error[0], "MPa", false},
-      {"K1", c.K1, f.bulk.std_error[1], "MPa", false},
-      {"G0", c.G0, f.shear.std_error[0], "MPa", gb[0]},
-      {"G1", c.G1, f.shear.std_error[1], "MPa", gb[1]},
-      {"G2", c.G2, f.shear.std_error[2], "-", gb[2]},
-  };
+  f.constants = constants_table(f, sFv0);
   return f;
 }
 
