@@ -50,7 +50,11 @@ labels, values = [], []
 for run in runs:
     threads = run["machine"]["kokkos_concurrency"]
     for row in run["throughput"]:
-        labels.append(f"{row['kernel']}\n{threads} thr")
+        if "refused" in row:
+            continue
+        # Older result files name the law "kernel"; newer ones name law and kernel.
+        name = f"{row['law']} {row['kernel']}" if "law" in row else row["kernel"]
+        labels.append(f"{name}\n{threads} thr")
         values.append(row["median_bead_steps_per_second"] / 1e6)
 ax.bar(range(len(values)), values)
 ax.set_xticks(range(len(values)), labels, fontsize=7)

@@ -34,6 +34,13 @@ DisorderTarget parse_disorder_target(const std::string& s) {
   bad_option("disorder target", s, "mass_and_stiffness or mass_only");
 }
 
+ChainKernel parse_chain_kernel(const std::string& s) {
+  if (s == "auto") return ChainKernel::Auto;
+  if (s == "global") return ChainKernel::Global;
+  if (s == "on_chip") return ChainKernel::OnChip;
+  bad_option("kernel", s, "auto, global or on_chip");
+}
+
 std::vector<double> chain_masses(const ChainSpec& spec, std::uint64_t realization) {
   if (spec.xi < 0) throw InputError("disorder xi must not be negative");
   if (spec.min_mass < 0 || spec.min_mass >= 1)

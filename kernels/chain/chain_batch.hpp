@@ -26,11 +26,17 @@ enum class ChainForce { Hertz, Linear };
 enum class StiffnessRule { Radius, Mass };
 // Disorder on mass and (through kappa and Delta) on contact stiffness, or on mass only.
 enum class DisorderTarget { MassAndStiffness, MassOnly };
+// Which Verlet kernel advances the batch (kernels/chain/chain_verlet.hpp): the sweep over
+// the global arrays, the on-chip one that holds a realization in its team's registers for
+// all the steps of one call (kernels/chain/chain_on_chip.hpp), or the on-chip one on a
+// device where a chain fits a team and the global sweep elsewhere. Both give the same bits.
+enum class ChainKernel { Auto, Global, OnChip };
 
 ChainBoundary parse_chain_boundary(const std::string& s);
 ChainForce parse_chain_force(const std::string& s);
 StiffnessRule parse_stiffness_rule(const std::string& s);
 DisorderTarget parse_disorder_target(const std::string& s);
+ChainKernel parse_chain_kernel(const std::string& s);
 
 struct ChainSpec {
   int beads = 0;
@@ -74,6 +80,7 @@ struct ChainBatch {
   Kokkos::View<int*, mem> opened;  // 1 where a contact of the realization opened
   std::vector<std::uint64_t> realization;  // global index of each row (its disorder stream)
   double time = 0.0;
+  ChainKernel kernel = ChainKernel::Auto;
 
   ChainBatch(const ChainSpec& s, const std::vector<std::uint64_t>& realizations)
       : spec(s),

@@ -7,25 +7,10 @@
 #include <sstream>
 
 #include "kernels/chain/chain_batch.hpp"
+#include "kernels/chain/chain_contact_force.hpp"
+#include "kernels/chain/chain_on_chip.hpp"
 
 namespace granular {
-
-// Force that contact c pushes onto its right bead (and pulls from its left bead), given
-// the relative displacement du = u_left - u_right; also reports the overlap.
-template <ChainForce Law>
-struct ChainContactForce {
-  KOKKOS_INLINE_FUNCTION static double eval(double kappa, double delta0, double klin, double du,
-                                            double& overlap) {
-    overlap = delta0 + du;
-    if constexpr (Law == ChainForce::Hertz) {
-      // Static part included: kappa delta0^{3/2} = 1 on every contact, so it cancels.
-      return overlap > 0.0 ? kappa * overlap * Kokkos::Experimental::sqrt(overlap) : 0.0;
-    } else {
-      (void)kappa;
-      return klin * du;  // the constant static force cancels between the two sides
-    }
-  }
-};
 
 template <class Space>
 int chain_team_size(int beads) {
@@ -149,6 +134,23 @@ void chain_accelerations(ChainBatch<Space>& c) {
   chain_check_contacts(c, c.time);
 }
 
+// The batch's kernel choice (ChainKernel): on chip where asked, or by default on a device
+// where the chain fits one team; the global sweep otherwise. Asked for and not fitting is
+// an error rather than a silent fall-back, so a benchmark measures what it names.
+template <ChainForce Law, class Space>
+void chain_step_with(ChainBatch<Space>& c, double dt, long steps) {
+  constexpr bool host =
+      Kokkos::SpaceAccessibility<Kokkos::HostSpace, typename Space::memory_space>::accessible;
+  const bool try_chip = c.kernel == ChainKernel::OnChip || (c.kernel == ChainKernel::Auto && !host);
+  if (try_chip && chain_advance_on_chip<Law>(c, dt, steps)) return;
+  if (c.kernel == ChainKernel::OnChip)
+    throw InputError("the on-chip chain kernel cannot hold a chain of " + std::to_string(c.N) +
+                     " beads in one team of this execution space (it takes up to 32 beads per "
+                     "thread of the largest team on a device, 4096 on a host); use the global "
+                     "kernel");
+  chain_sweep<Law>(c, dt, steps);
+}
+
 // Advances every realization by `steps` Verlet steps of size dt; u, v, a synchronized on
 // return. A contact that opened stops the run.
 template <class Space>
@@ -156,9 +158,9 @@ void chain_advance(ChainBatch<Space>& c, double dt, long steps) {
   if (steps <= 0) return;
   const double t0 = c.time;
   if (c.spec.force == ChainForce::Hertz)
-    chain_sweep<ChainForce::Hertz>(c, dt, steps);
+    chain_step_with<ChainForce::Hertz>(c, dt, steps);
   else
-    chain_sweep<ChainForce::Linear>(c, dt, steps);
+    chain_step_with<ChainForce::Linear>(c, dt, steps);
   c.time = t0 + dt * static_cast<double>(steps);
   chain_check_contacts(c, t0);
 }

@@ -25,6 +25,7 @@ ChainScene read_chain_scene(const SceneFile& scene) {
                 "must be \"verlet\" (the chain of chain.force, stepped) or \"exact\" (the "
                 "linearized chain's eigenmodes, evaluated at the sample times)");
   c.exact = solver == "exact";
+  c.kernel = scene.choice("time.kernel", "auto", parse_chain_kernel);
   c.sample_every = scene.real("time.sample_every");
   scene.require(!c.exact || c.spec.force == ChainForce::Linear, "time.solver",
                 "\"exact\" solves the linearized chain: set chain.force = \"linear\"");

@@ -12,10 +12,11 @@
 namespace granular {
 
 struct ChainScene {
-  ChainSpec spec;            // xi is set per ensemble from `xis`
-  std::vector<double> xis;   // disorder values, one ensemble each
-  int realizations = 0;      // ensemble size
-  bool exact = false;        // time.solver = "exact": the linearized chain's eigenmodes
+  ChainSpec spec;           // xi is set per ensemble from `xis`
+  std::vector<double> xis;  // disorder values, one ensemble each
+  int realizations = 0;     // ensemble size
+  bool exact = false;       // time.solver = "exact": the linearized chain's eigenmodes
+  ChainKernel kernel = ChainKernel::Auto;  // time.kernel: which Verlet kernel (same bits)
   double dt = 0;             // Verlet time step (units of t_c); the sample interval if exact
   double sample_every = 0;   // time between samples
   double energy_growth = 0;  // divergence guard factor

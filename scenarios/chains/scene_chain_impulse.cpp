@@ -87,6 +87,7 @@ std::vector<ImpulseBlock> impulse_verlet(const ChainScene& cs, const BlockRange&
   std::vector<std::uint64_t> ids(n);
   for (int r = 0; r < n; ++r) ids[r] = static_cast<std::uint64_t>(mine.first + r);
   ChainBatch<Space> c(cs.spec, ids);
+  c.kernel = cs.kernel;
   chain_set_impulse(c, source, v0);
   chain_check_time_step(c, cs.dt);
   chain_accelerations(c);

@@ -67,6 +67,7 @@ EnsembleRun run_band_ensemble(const ChainScene& cs, const std::vector<int>& tone
   const std::vector<int> my_tones(tones.begin() + at,
                                   tones.begin() + at + std::ptrdiff_t(groups) * R * tones_each);
   ChainBatch<Space> c(cs.spec, ids);
+  c.kernel = cs.kernel;
   chain_set_standing_waves(c, my_tones, tones_each, u0);
   chain_check_time_step(c, cs.dt);
   chain_accelerations(c);

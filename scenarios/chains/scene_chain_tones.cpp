@@ -62,6 +62,7 @@ std::vector<ToneRun> run_tones(const ChainScene& cs, const std::vector<int>& ton
   for (int g = 0; g < G; ++g)
     for (int r = 0; r < R; ++r) ids.push_back(r);  // the same disorder in every experiment
   ChainBatch<Space> c(cs.spec, ids);
+  c.kernel = cs.kernel;
   // chain_set_standing_waves takes one amplitude: set each experiment's rows, then scale.
   std::vector<int> row_tones;
   for (const ToneRun& run : runs) row_tones.insert(row_tones.end(), R, run.tone);

@@ -46,7 +46,8 @@ SLOW = ["confined_compression_quick", "wave_transmission_quick",
 # `long` label (ctest -L long). A full scene joins this list once its reference is
 # regenerated and verified.
 FULL = ["wave_transmission", "confined_compression_hydrogel", "confined_compression_rubber",
-        "isotropic_compression"]
+        "isotropic_compression", "chain_tones", "chain_master_equation", "chain_impulse_exact",
+        "chain_impulse", "chain_impulse_centre"]
 
 SKIPPED_KEYS = ("seconds", "per_second", "started_utc", "finished_utc")
 
