@@ -146,6 +146,20 @@ struct LammpsSetup {
   long steps = 0, every = 0;
 };
 
+// Every recorded state stays in memory until the run is written (LammpsState: 15 doubles per
+// atom), so a deck whose run.steps / run.output_every would hold more than the machine has is
+// refused before the force field is built or a step is taken.
+void require_states_fit(const SceneFile& scene, long steps, long every, int atoms) {
+  const double states = (every > 0 ? static_cast<double>(steps / every) : 0.0) + 2.0;
+  try {
+    scene.require_memory("run.steps", states * static_cast<double>(atoms) * 15.0 * 8.0);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) +
+                     ", or raise run.output_every (each recorded state holds every atom's "
+                     "positions, velocities, spins, forces and torques until the end)");
+  }
+}
+
 LammpsSetup read_setup(const SceneFile& scene) {
   LammpsSetup c;
   const std::string data_path = scene.input_path("lammps.data");
@@ -165,6 +179,7 @@ LammpsSetup read_setup(const SceneFile& scene) {
   } catch (const InputError& e) {
     scene.require(false, "lammps.data", e.what());
   }
+  require_states_fit(scene, c.steps, c.every, c.data.particles.size());
   try {
     c.model = parse_lammps_pair(style, coeffs, c.data.atom_types, c.units);
   } catch (const InputError& e) {

@@ -1,14 +1,20 @@
 // The LAMMPS force reference on its own (LAMMPS itself is compared in tests/lammps/): closed
 // forms of two-sphere contacts, the tangential history's life, periodic images of a sheared
-// box, and every malformed model rejected with a message that says what is accepted.
+// box, and every malformed model rejected with a message that says what is accepted; the
+// scene refuses a run whose recorded states would not fit in memory.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
+#include "core/lammps/lammps_data.hpp"
 #include "core/lammps/lammps_forces.hpp"
 #include "core/run/error.hpp"
 #include "granular_config.hpp"
+#include "scenarios/scene_registry.hpp"
+#include "tests/test_support.hpp"
 
 using namespace granular;
 
@@ -169,4 +175,41 @@ TEST(LammpsForces, MalformedModelsAreRefusedSayingWhatIsAccepted) {
                                lammps_units("si"), 1e-7);
             }).find("larger box"),
             std::string::npos);
+}
+
+// Every recorded state of the scene stays in memory until the run is written: a deck whose
+// run.steps / run.output_every would hold terabytes (here 20000 atoms, a million states) is
+// refused before anything is built or written, naming both settings and the file. The box is
+// also too narrow for the spheres, so that without the guard the run is refused for
+// lammps.data (and this test fails) instead of recording states until memory runs out.
+TEST(LammpsForces, SceneRefusesARunWhoseStatesWouldNotFitInMemory) {
+  const int n = 20000;
+  HostParticles h;
+  h.resize(n);
+  for (int i = 0; i < n; ++i) {
+    h.radius[i] = 5e-4, h.density[i] = 2500.0;
+    h.x[i] = 2e-3 * (i % 100 + 0.5), h.y[i] = 2e-3 * (i / 100 + 0.5), h.z[i] = 4.5e-4;
+  }
+  const double lo[3] = {0, 0, 0}, len[3] = {0.2, 0.4, 9e-4};
+  const std::string dir = granular::testing::temp_dir("lammps_states_guard");
+  std::filesystem::create_directories(dir);
+  const std::string data = dir + "/wide.data", deck = dir + "/too_many_states.toml";
+  std::ofstream(data) << lammps_data_text(h, lo, len, {}, 1.0, 1.0, 1.0);
+  std::ofstream(deck) << "scene = \"lammps_forces\"\n[lammps]\ndata = \"" << data
+                      << "\"\nunits = \"si\"\npair_style = \"gran/hooke 2000 NULL 5e4 NULL 0.5 "
+                         "1\"\npair_coeff = [\"* *\"]\ntimestep = 1e-7\n[run]\nsteps = "
+                         "1000000\noutput_every = 1\n";
+  RunOptions opts;
+  opts.out_dir = dir + "/out";
+  opts.progress = false, opts.charts = false;
+  std::string what = "no error";
+  try {
+    run_lammps_forces(SceneFile::load(deck), opts);
+  } catch (const InputError& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("'run.steps'"), std::string::npos) << what;
+  EXPECT_NE(what.find("run.output_every"), std::string::npos) << what;
+  EXPECT_NE(what.find(deck), std::string::npos) << what;
+  EXPECT_FALSE(std::filesystem::exists(opts.out_dir));
 }
