@@ -46,6 +46,13 @@ void start(ChainBatch<Space>& c) {
   chain_accelerations(c);
 }
 
+// A team body that does nothing: asks a team policy how large a team may be. A functor, not
+// a lambda: nvcc refuses device lambdas inside a test body (a private member function).
+struct EmptyTeamBody {
+  template <class Member>
+  KOKKOS_INLINE_FUNCTION void operator()(const Member&) const {}
+};
+
 template <class Space>
 void expect_same_state(const ChainBatch<Space>& x, const ChainBatch<Space>& y,
                        const std::string& what) {
@@ -81,9 +88,7 @@ TYPED_TEST(ChainOnChipTest, OnChipKernelGivesTheGlobalSweepsBitsForBothLawsAndBo
 // blocks' end displacements go through the halo, and the contact between two blocks is
 // computed by both threads.
 TYPED_TEST(ChainOnChipTest, ThreadsOfOneChainExchangeTheirEndsAndKeepTheGlobalSweepsBits) {
-  using Policy = Kokkos::TeamPolicy<TypeParam>;
-  const auto probe = KOKKOS_LAMBDA(const typename Policy::member_type&){};
-  const int threads = std::min(16, chain_team_max<TypeParam>(probe));
+  const int threads = std::min(16, chain_team_max<TypeParam>(EmptyTeamBody{}));
   for (auto law : {ChainForce::Hertz, ChainForce::Linear})
     for (auto bc : {ChainBoundary::Fixed, ChainBoundary::Periodic}) {
       const int n = 4 * threads - 1;  // the last thread owns three beads
@@ -116,9 +121,7 @@ TYPED_TEST(ChainOnChipTest, AChainTooLongForTheOnChipKernelIsRefusedNamingTheAlt
   constexpr bool host =
       Kokkos::SpaceAccessibility<Kokkos::HostSpace, typename TypeParam::memory_space>::accessible;
   if constexpr (host) {
-    using Policy = Kokkos::TeamPolicy<TypeParam>;
-    const auto probe = KOKKOS_LAMBDA(const typename Policy::member_type&){};
-    const int n = 4096 * chain_team_max<TypeParam>(probe) + 1;
+    const int n = 4096 * chain_team_max<TypeParam>(EmptyTeamBody{}) + 1;
     ChainBatch<TypeParam> c(spec_of(n, ChainBoundary::Fixed, ChainForce::Linear, 0.0), {0});
     c.kernel = ChainKernel::OnChip;
     chain_set_impulse(c, 0, 0.01);
