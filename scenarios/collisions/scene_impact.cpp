@@ -6,8 +6,12 @@
 // rebound angle); the restitution against the input one over the speeds, for the chosen
 // mapping of e to the damping constant and for the other one.
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/dem/restitution.hpp"
 #include "core/io/dataset_units.hpp"
@@ -111,12 +115,23 @@ ImpactPair impact_pair(const ImpactScene& c) {
   return p;
 }
 
+// One head-on impact of the speed sweep under the scene's mapping, beside elastic Hertz.
+struct SpeedRow {
+  double speed = 0, restitution = 0, duration = 0, max_overlap = 0, max_normal_force = 0;
+  HertzClosedForm hertz;
+};
+
 // 1. Head-on impacts over the speeds, with both mappings of e to the damping constant.
-void speed_sweep(const ImpactScene& c, const ImpactPair& p, H5Writer& h5, Json& summary) {
+struct SpeedSweep {
+  std::vector<SpeedRow> rows;                       // the scene's own mapping
+  std::vector<double> e_exact, e_common, tc_ratio;  // per speed
+  double worst_exact = 0, worst_common = 0, spread = 0;
+};
+
+SpeedSweep speed_sweep(const ImpactScene& c, const ImpactPair& p) {
   const MaterialSet& mats = c.materials;
   const double estar = p.estar, rstar = p.rstar, mstar = p.mstar, e_in = p.e_in;
-  Json speeds = Json::array();
-  std::vector<double> e_exact, e_common, tc_ratio;
+  SpeedSweep w;
   for (const std::string& mapping :
        {std::string("restitution_exact"), std::string("restitution_common")}) {
     MaterialSet m = mats;
@@ -124,108 +139,149 @@ void speed_sweep(const ImpactScene& c, const ImpactPair& p, H5Writer& h5, Json& 
     with_material_model(m, [&](const auto& model) {
       for (double v : c.speeds) {
         const ImpactResult r = run_case(model, c, v, 0.0, false, estar, rstar, mstar);
-        (mapping == "restitution_exact" ? e_exact : e_common).push_back(r.restitution_normal);
+        (mapping == "restitution_exact" ? w.e_exact : w.e_common).push_back(r.restitution_normal);
         if (mapping != mats.damping) continue;
         const auto cf = hertz_closed_form(estar, rstar, mstar, v);
-        Json j = Json::object();
-        j["speed"] = v;
-        j["restitution"] = r.restitution_normal;
-        j["duration"] = r.duration;
-        j["max_overlap"] = r.max_overlap;
-        j["max_normal_force"] = r.max_normal_force;
-        j["elastic_hertz_duration"] = cf.duration;
-        j["elastic_hertz_overlap"] = cf.overlap;
-        j["elastic_hertz_force"] = cf.force;
-        tc_ratio.push_back(r.duration / cf.duration);
-        speeds.push(j);
+        w.rows.push_back(
+            {v, r.restitution_normal, r.duration, r.max_overlap, r.max_normal_force, cf});
+        w.tc_ratio.push_back(r.duration / cf.duration);
       }
     });
   }
+  const std::vector<double>& own = mats.damping == "restitution_exact" ? w.e_exact : w.e_common;
+  w.spread = *std::max_element(own.begin(), own.end()) - *std::min_element(own.begin(), own.end());
+  for (size_t k = 0; k < w.e_exact.size(); ++k) {
+    w.worst_exact = max_keep_nan(w.worst_exact, std::fabs(w.e_exact[k] - e_in));
+    w.worst_common = max_keep_nan(w.worst_common, std::fabs(w.e_common[k] - e_in));
+  }
+  std::cout << "restitution over speeds " << c.speeds.front() << " .. " << c.speeds.back()
+            << ": input " << e_in << ", largest error exact mapping " << w.worst_exact
+            << ", common mapping " << w.worst_common << "\n";
+  return w;
+}
+
+void write_speed_sweep(const ImpactScene& c, const SpeedSweep& w, H5Writer& h5, Json& summary) {
+  Json speeds = Json::array();
+  for (const SpeedRow& row : w.rows) {
+    Json j = Json::object();
+    j["speed"] = row.speed;
+    j["restitution"] = row.restitution;
+    j["duration"] = row.duration;
+    j["max_overlap"] = row.max_overlap;
+    j["max_normal_force"] = row.max_normal_force;
+    j["elastic_hertz_duration"] = row.hertz.duration;
+    j["elastic_hertz_overlap"] = row.hertz.overlap;
+    j["elastic_hertz_force"] = row.hertz.force;
+    speeds.push(j);
+  }
   summary["speed_sweep"] = speeds;
   write_quantity(h5, "/speed_sweep/speed", c.speeds, "mm us-1");
-  write_quantity(h5, "/speed_sweep/restitution_exact_mapping", e_exact, "1");
-  write_quantity(h5, "/speed_sweep/restitution_common_mapping", e_common, "1");
-  write_quantity(h5, "/speed_sweep/duration_over_elastic_hertz", tc_ratio, "1");
-  auto spread = [](const std::vector<double>& v) {
-    return *std::max_element(v.begin(), v.end()) - *std::min_element(v.begin(), v.end());
-  };
-  double worst_exact = 0, worst_common = 0;
-  for (size_t k = 0; k < e_exact.size(); ++k) {
-    worst_exact = max_keep_nan(worst_exact, std::fabs(e_exact[k] - e_in));
-    worst_common = max_keep_nan(worst_common, std::fabs(e_common[k] - e_in));
-  }
-  summary["restitution_error_exact_mapping"] = worst_exact;
-  summary["restitution_error_common_mapping"] = worst_common;
-  summary["restitution_speed_spread"] =
-      spread(mats.damping == "restitution_exact" ? e_exact : e_common);
-  std::cout << "restitution over speeds " << c.speeds.front() << " .. " << c.speeds.back()
-            << ": input " << e_in << ", largest error exact mapping " << worst_exact
-            << ", common mapping " << worst_common << "\n";
+  write_quantity(h5, "/speed_sweep/restitution_exact_mapping", w.e_exact, "1");
+  write_quantity(h5, "/speed_sweep/restitution_common_mapping", w.e_common, "1");
+  write_quantity(h5, "/speed_sweep/duration_over_elastic_hertz", w.tc_ratio, "1");
+  summary["restitution_error_exact_mapping"] = w.worst_exact;
+  summary["restitution_error_common_mapping"] = w.worst_common;
+  summary["restitution_speed_spread"] = w.spread;
+}
+
+// One oblique impact, its series recorded, and gross sliding's closed form where it applies.
+struct ObliqueCase {
+  double angle = 0;
+  ImpactResult r;
+  bool slides = false;
+  double sgn = 1, vt_cf = 0, w_cf = 0, dvt = 0;
+};
+
+// Gross sliding of a solid sphere on a wall (docs/model_dem.md §10): it slides for the whole
+// impact when |v_c| > (7/2) mu (1 + e) v_n; the tangential impulse is then mu (1 + e) m v_n
+// against the slip. For a pair the threshold involves both spheres' inertia, so only the
+// measured impulse ratio is reported.
+ObliqueCase oblique_case(const ImpactScene& c, double mu, double a, ImpactResult r) {
+  ObliqueCase k;
+  k.angle = a;
+  const double vn = r.vn_in, e = r.restitution_normal;
+  k.sgn = r.vc_in >= 0 ? 1.0 : -1.0;
+  k.slides = c.wall && std::fabs(r.vc_in) > 3.5 * mu * (1 + e) * vn;
+  k.dvt = -k.sgn * mu * (1 + e) * vn;  // change of the centre's tangential speed
+  k.vt_cf = r.vt_in + k.dvt;
+  k.w_cf = r.spin_in - 2.5 * k.dvt / c.radius;  // torque lever -R z x f_t
+  k.r = std::move(r);
+  return k;
 }
 
 // 2. Oblique impacts at one speed over the incidence angles (with a snapshot series each).
-void oblique_sweep(const ImpactScene& c, const ImpactPair& p, const RunOptions& opts, H5Writer& h5,
-                   Json& summary) {
-  const MaterialSet& mats = c.materials;
-  const double estar = p.estar, rstar = p.rstar, mstar = p.mstar, mu = p.mu;
-  const double v = c.oblique_speed;
-  Json cases = Json::array();
-  std::vector<double> angle, en, et, wout, rebound, jt_over_jn, cf_rebound, cf_wout, cf_et, sliding;
-  with_material_model(mats, [&](const auto& model) {
+std::vector<ObliqueCase> oblique_sweep(const ImpactScene& c, const ImpactPair& p,
+                                       const RunOptions& opts) {
+  std::vector<ObliqueCase> cases;
+  with_material_model(c.materials, [&](const auto& model) {
     int k = 0;
     for (double a : c.angles) {
-      SnapshotSeries snapshots(opts.out_dir, "snapshots_oblique_" + std::to_string(k),
+      SnapshotSeries snapshots(opts.out_dir, "snapshots_oblique_" + std::to_string(k++),
                                c.snapshot_every);
-      const ImpactResult r = run_case(model, c, v, a, true, estar, rstar, mstar, &snapshots);
-      const double vn = r.vn_in, e = r.restitution_normal;
-      // Gross sliding of a solid sphere on a wall (docs/model_dem.md §10): it slides for the
-      // whole impact when |v_c| > (7/2) mu (1 + e) v_n; the tangential impulse is then
-      // mu (1 + e) m v_n against the slip. For a pair the threshold involves both spheres'
-      // inertia, so only the measured impulse ratio is reported.
-      const double jn = r.impulse_normal;
-      const double sgn = r.vc_in >= 0 ? 1.0 : -1.0;
-      const bool slides = c.wall && std::fabs(r.vc_in) > 3.5 * mu * (1 + e) * vn;
-      const double dvt = -sgn * mu * (1 + e) * vn;  // change of the centre's tangential speed
-      const double vt_cf = r.vt_in + dvt;
-      const double w_cf = r.spin_in - 2.5 * dvt / c.radius;  // torque lever -R z x f_t
-      Json j = Json::object();
-      j["angle_deg"] = a;
-      j["restitution_normal"] = e;
-      j["restitution_tangential"] = r.restitution_tangential;
-      j["rebound_angle_deg"] = r.rebound_angle * 180 / M_PI;
-      j["spin_in"] = r.spin_in;
-      j["spin_out"] = r.spin_out;
-      j["impulse_tangential_over_normal"] = jn != 0 ? -r.impulse_tangential / jn : 0.0;
-      j["duration"] = r.duration;
-      j["max_overlap"] = r.max_overlap;
-      j["max_normal_force"] = r.max_normal_force;
-      j["gross_sliding"] = slides;
-      if (slides) {
-        j["closed_form_impulse_ratio"] = sgn * mu;
-        j["closed_form_spin_out"] = w_cf;
-        j["closed_form_rebound_angle_deg"] = std::atan2(vt_cf, e * vn) * 180 / M_PI;
-      }
-      cases.push(j);
-      angle.push_back(a), en.push_back(e), et.push_back(r.restitution_tangential);
-      wout.push_back(r.spin_out * c.radius / v);
-      rebound.push_back(r.rebound_angle * 180 / M_PI);
-      jt_over_jn.push_back(jn != 0 ? -r.impulse_tangential / jn : 0.0);
-      sliding.push_back(slides ? 1.0 : 0.0);
-      cf_wout.push_back(slides ? w_cf * c.radius / v : NAN);
-      cf_rebound.push_back(slides ? std::atan2(vt_cf, e * vn) * 180 / M_PI : NAN);
-      cf_et.push_back(slides ? -(r.vc_in + 3.5 * dvt) / r.vc_in : NAN);  // v_c' = v_c + 7/2 dv_t
-      const std::string g = "/oblique/case_" + std::to_string(k++);
-      write_quantity(h5, g + "/time", r.t, "us");
-      write_quantity(h5, g + "/overlap", r.overlap, "mm");
-      write_quantity(h5, g + "/normal_force", r.force_normal, "N");
-      write_quantity(h5, g + "/tangential_force", r.force_tangential, "N");
-      h5.attribute(g, "angle_deg", a);
-      std::cout << "angle " << a << " deg: e_n " << e << ", e_t " << r.restitution_tangential
-                << ", rebound " << r.rebound_angle * 180 / M_PI << " deg, spin out " << r.spin_out
-                << (slides ? " (gross sliding)" : "") << "\n";
+      ObliqueCase o = oblique_case(
+          c, p.mu, a,
+          run_case(model, c, c.oblique_speed, a, true, p.estar, p.rstar, p.mstar, &snapshots));
+      const ImpactResult& r = o.r;
+      std::cout << "angle " << a << " deg: e_n " << r.restitution_normal << ", e_t "
+                << r.restitution_tangential << ", rebound " << r.rebound_angle * 180 / M_PI
+                << " deg, spin out " << r.spin_out << (o.slides ? " (gross sliding)" : "") << "\n";
+      cases.push_back(std::move(o));
     }
   });
-  summary["oblique"] = cases;
+  return cases;
+}
+
+Json oblique_json(const ObliqueCase& k, double mu) {
+  const ImpactResult& r = k.r;
+  const double jn = r.impulse_normal, e = r.restitution_normal;
+  Json j = Json::object();
+  j["angle_deg"] = k.angle;
+  j["restitution_normal"] = e;
+  j["restitution_tangential"] = r.restitution_tangential;
+  j["rebound_angle_deg"] = r.rebound_angle * 180 / M_PI;
+  j["spin_in"] = r.spin_in;
+  j["spin_out"] = r.spin_out;
+  j["impulse_tangential_over_normal"] = jn != 0 ? -r.impulse_tangential / jn : 0.0;
+  j["duration"] = r.duration;
+  j["max_overlap"] = r.max_overlap;
+  j["max_normal_force"] = r.max_normal_force;
+  j["gross_sliding"] = k.slides;
+  if (k.slides) {
+    j["closed_form_impulse_ratio"] = k.sgn * mu;
+    j["closed_form_spin_out"] = k.w_cf;
+    j["closed_form_rebound_angle_deg"] = std::atan2(k.vt_cf, e * r.vn_in) * 180 / M_PI;
+  }
+  return j;
+}
+
+// The oblique impacts' series (/oblique/case_<k>) and table (/angles), and the summary's list.
+void write_oblique(const ImpactScene& c, double mu, const std::vector<ObliqueCase>& cases,
+                   H5Writer& h5, Json& summary) {
+  const double v = c.oblique_speed;
+  Json list = Json::array();
+  std::vector<double> angle, en, et, wout, rebound, jt_over_jn, cf_rebound, cf_wout, cf_et, sliding;
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const ObliqueCase& o = cases[k];
+    const ImpactResult& r = o.r;
+    const double vn = r.vn_in, e = r.restitution_normal, jn = r.impulse_normal;
+    list.push(oblique_json(o, mu));
+    angle.push_back(o.angle), en.push_back(e), et.push_back(r.restitution_tangential);
+    wout.push_back(r.spin_out * c.radius / v);
+    rebound.push_back(r.rebound_angle * 180 / M_PI);
+    jt_over_jn.push_back(jn != 0 ? -r.impulse_tangential / jn : 0.0);
+    sliding.push_back(o.slides ? 1.0 : 0.0);
+    cf_wout.push_back(o.slides ? o.w_cf * c.radius / v : NAN);
+    cf_rebound.push_back(o.slides ? std::atan2(o.vt_cf, e * vn) * 180 / M_PI : NAN);
+    // v_c' = v_c + 7/2 dv_t
+    cf_et.push_back(o.slides ? -(r.vc_in + 3.5 * o.dvt) / r.vc_in : NAN);
+    const std::string g = "/oblique/case_" + std::to_string(k);
+    write_quantity(h5, g + "/time", r.t, "us");
+    write_quantity(h5, g + "/overlap", r.overlap, "mm");
+    write_quantity(h5, g + "/normal_force", r.force_normal, "N");
+    write_quantity(h5, g + "/tangential_force", r.force_tangential, "N");
+    h5.attribute(g, "angle_deg", o.angle);
+  }
+  summary["oblique"] = list;
   write_quantity(h5, "/angles/angle_deg", angle, "deg");
   write_quantity(h5, "/angles/restitution_normal", en, "1");
   write_quantity(h5, "/angles/restitution_tangential", et, "1");
@@ -239,14 +295,8 @@ void oblique_sweep(const ImpactScene& c, const ImpactPair& p, const RunOptions& 
   write_quantity(h5, "/angles/closed_form_restitution_tangential", cf_et, "1");
 }
 
-}  // namespace
-
-void run_impact(const SceneFile& scene, const RunOptions& opts) {
-  const ImpactScene c = read_scene(scene);
-  if (!begin_outputs(opts)) return;
-  const ImpactPair p = impact_pair(c);
-  SceneOutput output(scene, opts, "impact");
-  Json& summary = output.summary();
+// The pair's constants in the summary.
+void write_pair(const ImpactScene& c, const ImpactPair& p, Json& summary) {
   summary["effective_young_modulus"] = p.estar;
   summary["effective_shear_modulus"] = c.materials.effective_shear(c.sphere, c.target);
   summary["reduced_radius"] = p.rstar;
@@ -255,11 +305,24 @@ void run_impact(const SceneFile& scene, const RunOptions& opts) {
   summary["friction"] = p.mu;
   summary["alpha_exact"] = hertz_alpha_exact(p.e_in);
   summary["alpha_common"] = hertz_alpha_common(p.e_in);
-  speed_sweep(c, p, output.h5(), summary);
-  oblique_sweep(c, p, opts, output.h5(), summary);
-  output.h5().attribute("/", "restitution_input", p.e_in);
-  output.h5().attribute("/", "friction", p.mu);
-  output.h5().attribute("/", "target", c.wall ? "wall" : "sphere");
+}
+
+}  // namespace
+
+void run_impact(const SceneFile& scene, const RunOptions& opts) {
+  const ImpactScene c = read_scene(scene);
+  if (!begin_outputs(opts)) return;
+  const ImpactPair p = impact_pair(c);
+  SceneOutput output(scene, opts, "impact");
+  const SpeedSweep speeds = speed_sweep(c, p);
+  const std::vector<ObliqueCase> oblique = oblique_sweep(c, p, opts);
+  H5Writer& h5 = output.h5();
+  write_pair(c, p, output.summary());
+  write_speed_sweep(c, speeds, h5, output.summary());
+  write_oblique(c, p.mu, oblique, h5, output.summary());
+  h5.attribute("/", "restitution_input", p.e_in);
+  h5.attribute("/", "friction", p.mu);
+  h5.attribute("/", "target", c.wall ? "wall" : "sphere");
   output.finish();
 }
 

@@ -5,9 +5,13 @@
 // table [cases.<name>] of the scene file: its two materials, the target (wall or sphere, with
 // its own motion), and one swept quantity (docs/impact_benchmarks.md).
 #include <Kokkos_Core.hpp>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "core/dem/restitution.hpp"
 #include "core/io/dataset_units.hpp"
@@ -173,29 +177,17 @@ struct CaseErrors {
   int sliding_cases = 0;
 };
 
-// Runs case c's impact at its iv-th value: a row of o, the errors, and the first impact's
-// time series in results.h5.
-void run_impact_value(const BenchScene& b, const BenchCase& c, size_t iv, CaseOutput& o,
-                      CaseErrors& err, H5Writer& h5) {
-  const double x = c.values[iv];
-  const double m1 = sphere_mass(c.sphere, c.radius);
-  const double m2 = c.wall ? 0.0 : sphere_mass(c.target, c.target_radius);
-  const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
-  const double rstar =
-      c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
-  const MaterialSet mats = case_materials(b, c, c.sweep == Sweep::Restitution ? x : 0.0);
-  const double estar = mats.effective_young(0, 1);
-  const double e_in = mats.restitution(0, 1);
-  const double mu =
-      mats.tangential ? mats.pair(mats.materials[0].friction, mats.materials[1].friction) : 0.0;
-  ImpactSetup s = impact_setup(b, c, mats, x, mstar, rstar);
-  s.record = iv == 0;
-  ImpactResult r;
-  with_material_model(
-      mats, [&](const auto& model) { r = impact<Kokkos::DefaultExecutionSpace>(model, s); });
-  const auto hz = hertz_closed_form(estar, rstar, mstar, r.vn_in);
-  const GrossSliding g = gross_sliding(m1, c.radius, mstar, r.vn_in, r.vt_in, r.spin_in, r.vc_in,
-                                       mu, r.restitution_normal);
+// One case run: a row of columns per swept value, the errors, and its first impact's series.
+struct CaseRun {
+  CaseOutput o;
+  CaseErrors err;
+  ImpactResult first;
+  double hertz_stiffness = 0;  // 4/3 E* sqrt(R*) of the first impact's pair
+};
+
+// Impact x of case c measured against the closed forms: its row of o and the errors.
+void add_row(CaseOutput& o, CaseErrors& err, double x, double e_in, double mu,
+             const ImpactResult& r, const HertzClosedForm& hz, const GrossSliding& g) {
   o.value.push_back(x);
   o.vn.push_back(r.vn_in), o.vc.push_back(r.vc_in), o.spin_in.push_back(r.spin_in);
   o.mu.push_back(mu);
@@ -231,14 +223,33 @@ void run_impact_value(const BenchScene& b, const BenchCase& c, size_t iv, CaseOu
                   std::fabs(r.spin_out - g.spin1_out) / std::max(std::fabs(g.spin1_out), 1e-300),
                   std::fabs(r.restitution_tangential - g.restitution_tangential)}));
   }
+}
+
+// Runs case c's impact at its iv-th value into `run` (the first one recorded step by step).
+void run_impact_value(const BenchScene& b, const BenchCase& c, size_t iv, CaseRun& run) {
+  const double x = c.values[iv];
+  const double m1 = sphere_mass(c.sphere, c.radius);
+  const double m2 = c.wall ? 0.0 : sphere_mass(c.target, c.target_radius);
+  const double mstar = c.wall ? m1 : m1 * m2 / (m1 + m2);
+  const double rstar =
+      c.wall ? c.radius : c.radius * c.target_radius / (c.radius + c.target_radius);
+  const MaterialSet mats = case_materials(b, c, c.sweep == Sweep::Restitution ? x : 0.0);
+  const double estar = mats.effective_young(0, 1);
+  const double e_in = mats.restitution(0, 1);
+  const double mu =
+      mats.tangential ? mats.pair(mats.materials[0].friction, mats.materials[1].friction) : 0.0;
+  ImpactSetup s = impact_setup(b, c, mats, x, mstar, rstar);
+  s.record = iv == 0;
+  ImpactResult r;
+  with_material_model(
+      mats, [&](const auto& model) { r = impact<Kokkos::DefaultExecutionSpace>(model, s); });
+  const auto hz = hertz_closed_form(estar, rstar, mstar, r.vn_in);
+  const GrossSliding g = gross_sliding(m1, c.radius, mstar, r.vn_in, r.vt_in, r.spin_in, r.vc_in,
+                                       mu, r.restitution_normal);
+  add_row(run.o, run.err, x, e_in, mu, r, hz, g);
   if (s.record) {
-    const std::string g0 = "/cases/" + c.name + "/first";
-    write_quantity(h5, g0 + "/time", r.t, "us");
-    write_quantity(h5, g0 + "/overlap", r.overlap, "mm");
-    write_quantity(h5, g0 + "/normal_force", r.force_normal, "N");
-    write_quantity(h5, g0 + "/tangential_force", r.force_tangential, "N");
-    write_quantity(h5, g0 + "/slip", r.slip, "mm us-1");
-    h5.attribute(g0, "hertz_stiffness", 4.0 / 3.0 * estar * std::sqrt(rstar));
+    run.hertz_stiffness = 4.0 / 3.0 * estar * std::sqrt(rstar);
+    run.first = std::move(r);
   }
 }
 
@@ -282,7 +293,7 @@ void write_case_group(H5Writer& h5, const BenchCase& c, const CaseOutput& o) {
   h5.attribute(g, "radius", c.radius);
 }
 
-// Case c in summary.json (and a line on the console).
+// Case c in summary.json.
 Json case_json(const BenchCase& c, const CaseErrors& err) {
   const bool hertz = c.sweep == Sweep::Speed || c.sweep == Sweep::Restitution;
   Json j = Json::object();
@@ -295,6 +306,12 @@ Json case_json(const BenchCase& c, const CaseErrors& err) {
   if (hertz) j["largest_elastic_hertz_error"] = err.hertz;
   j["gross_sliding_cases"] = static_cast<long>(err.sliding_cases);
   if (err.sliding_cases > 0) j["largest_gross_sliding_error"] = err.sliding;
+  return j;
+}
+
+// Case c's line on the console, once its impacts are done.
+void report_case(const BenchCase& c, const CaseErrors& err) {
+  const bool hertz = c.sweep == Sweep::Speed || c.sweep == Sweep::Restitution;
   std::cout << "test " << c.test << " " << c.name << ": " << c.values.size()
             << " impacts, restitution error " << err.restitution;
   if (hertz) std::cout << ", elastic Hertz error " << err.hertz;
@@ -302,7 +319,41 @@ Json case_json(const BenchCase& c, const CaseErrors& err) {
     std::cout << ", gross sliding error " << err.sliding << " (" << err.sliding_cases
               << " sliding)";
   std::cout << "\n";
-  return j;
+}
+
+// Every case, every swept value.
+std::vector<CaseRun> run_cases(const BenchScene& b) {
+  std::vector<CaseRun> runs;
+  for (const BenchCase& c : b.cases) {
+    CaseRun run;
+    for (size_t iv = 0; iv < c.values.size(); ++iv) run_impact_value(b, c, iv, run);
+    report_case(c, run.err);
+    runs.push_back(std::move(run));
+  }
+  return runs;
+}
+
+// Each case's first impact and columns in results.h5, its errors in the summary.
+void write_cases(SceneOutput& output, const BenchScene& b, const std::vector<CaseRun>& runs) {
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
+  summary["coulomb_limit"] =
+      "mu |f_n| of the total normal force (elastic + dashpot), as dem.md writes it";
+  Json cases = Json::array();
+  for (size_t n = 0; n < runs.size(); ++n) {
+    const BenchCase& c = b.cases[n];
+    const ImpactResult& r = runs[n].first;
+    const std::string g0 = "/cases/" + c.name + "/first";
+    write_quantity(h5, g0 + "/time", r.t, "us");
+    write_quantity(h5, g0 + "/overlap", r.overlap, "mm");
+    write_quantity(h5, g0 + "/normal_force", r.force_normal, "N");
+    write_quantity(h5, g0 + "/tangential_force", r.force_tangential, "N");
+    write_quantity(h5, g0 + "/slip", r.slip, "mm us-1");
+    h5.attribute(g0, "hertz_stiffness", runs[n].hertz_stiffness);
+    write_case_group(h5, c, runs[n].o);
+    cases.push(case_json(c, runs[n].err));
+  }
+  summary["cases"] = cases;
 }
 
 }  // namespace
@@ -311,18 +362,7 @@ void run_impact_benchmarks(const SceneFile& scene, const RunOptions& opts) {
   const BenchScene b = read_scene(scene);
   if (!begin_outputs(opts)) return;
   SceneOutput output(scene, opts, "impact_benchmarks");
-  Json& summary = output.summary();
-  summary["coulomb_limit"] =
-      "mu |f_n| of the total normal force (elastic + dashpot), as dem.md writes it";
-  Json cases = Json::array();
-  for (const BenchCase& c : b.cases) {
-    CaseOutput o;
-    CaseErrors err;
-    for (size_t iv = 0; iv < c.values.size(); ++iv) run_impact_value(b, c, iv, o, err, output.h5());
-    write_case_group(output.h5(), c, o);
-    cases.push(case_json(c, err));
-  }
-  summary["cases"] = cases;
+  write_cases(output, b, run_cases(b));
   output.finish();
 }
 
