@@ -8,6 +8,10 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -124,6 +128,24 @@ struct IsoSetup {
   double d_mean() const { return 0.5 * (gas.diameter_min + gas.diameter_max); }
 };
 
+// particles.from: the packing read, and its count, density, sizes and volume fraction.
+void read_packing_start(const SceneFile& scene, IsoSetup& s) {
+  GasSpec& gas = s.gas;
+  s.start = read_scene_packing(scene, "particles.from", s.from, "particles.density",
+                               scene.text("particles.from_group", "/final_state"), s.start_box);
+  gas.count = s.start.size();
+  gas.density = s.start.density[0];
+  for (double d : s.start.density)
+    scene.require(d == gas.density && d > 0, "particles.from",
+                  "holds particles of different or non-positive densities; this scene "
+                  "keeps one density");
+  const auto [rmin, rmax] = std::minmax_element(s.start.radius.begin(), s.start.radius.end());
+  gas.diameter_min = 2 * *rmin, gas.diameter_max = 2 * *rmax;
+  double volume = 0;
+  for (double r : s.start.radius) volume += 4.0 / 3.0 * M_PI * r * r * r;
+  gas.phi = volume / s.start_box.volume();
+}
+
 IsoSetup read_setup(const SceneFile& scene) {
   IsoSetup s;
   GasSpec& gas = s.gas;
@@ -137,19 +159,7 @@ IsoSetup read_setup(const SceneFile& scene) {
     gas.speed = scene.real("particles.initial_speed", 0.0);
     gas.phi = scene.real("compression.phi_start");
   } else {
-    s.start = read_scene_packing(scene, "particles.from", s.from, "particles.density",
-                                 scene.text("particles.from_group", "/final_state"), s.start_box);
-    gas.count = s.start.size();
-    gas.density = s.start.density[0];
-    for (double d : s.start.density)
-      scene.require(d == gas.density && d > 0, "particles.from",
-                    "holds particles of different or non-positive densities; this scene "
-                    "keeps one density");
-    const auto [rmin, rmax] = std::minmax_element(s.start.radius.begin(), s.start.radius.end());
-    gas.diameter_min = 2 * *rmin, gas.diameter_max = 2 * *rmax;
-    double volume = 0;
-    for (double r : s.start.radius) volume += 4.0 / 3.0 * M_PI * r * r * r;
-    gas.phi = volume / s.start_box.volume();
+    read_packing_start(scene, s);
   }
   s.phi_end = scene.real("compression.phi_end");
   s.rate = scene.real("compression.volumetric_strain_rate");
@@ -216,11 +226,45 @@ System make_system(const IsoSetup& s, bool resume, const std::string& checkpoint
   return System(Particles<Exec>::from_host(host), box, s.model(), s.params);
 }
 
+// The checkpoint: the system's exact state and the series so far. It changes nothing in the
+// system, so the run does not depend on run.checkpoint_every and a resumed run repeats the
+// uninterrupted one bit for bit.
+void save_checkpoint(const std::string& checkpoint, const System& sys, const Series& series) {
+  H5Writer out(checkpoint);
+  write_restart(out, "/restart", sys);
+  series.write(out, "/series");
+  out.commit();
+}
+
+// After a physical failure: the last state (last_state.h5 and its XDMF file) and the snapshot
+// frames up to the failure, which show how it came about.
+void leave_last_state(const IsoSetup& s, const RunOptions& opts, const System& sys,
+                      SnapshotSeries& snapshots) {
+  H5Writer out(opts.out_dir + "/last_state.h5");
+  write_state(out, "/state", sys.particles(), sys.box(), s.gas.density);
+  out.commit();
+  write_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5",
+             {state_frame("/state", sys.particles().n)}, false);
+  try {
+    snapshots.finish(sys);
+  } catch (const std::exception& e) {
+    std::cerr << "warning: snapshot series not written: " << e.what() << "\n";
+  }
+}
+
+// Records a snapshot frame if one is due; true when it did.
+bool sample_frame(SnapshotSeries& snapshots, const System& sys) {
+  const int frames = snapshots.frames();
+  snapshots.sample(sys);
+  return snapshots.frames() > frames;
+}
+
 // Compresses at the volumetric rate to phi_end, then relaxes at constant volume, sampling the
-// series and checkpointing as it goes; false when it stopped at run.stop_after. A physical
-// failure leaves the last state and the frames so far, then goes on up.
+// series and checkpointing as it goes; false when it stopped at run.stop_after. `framed`: whether
+// the snapshot series' last frame holds the end state. A physical failure leaves the last state
+// and the frames so far, then goes on up.
 bool compress_and_relax(const IsoSetup& s, const RunOptions& opts, const std::string& checkpoint,
-                        System& sys, Series& series, SnapshotSeries& snapshots) {
+                        System& sys, Series& series, SnapshotSeries& snapshots, bool& framed) {
   const long step0 = sys.steps();  // where this run starts: 0, or the checkpoint's step
   // Per-axis rate for the volumetric rate: V(t) = V0 exp(-rate t) in the limit dt -> 0.
   const double axis_rate = -s.rate / 3.0;
@@ -229,17 +273,9 @@ bool compress_and_relax(const IsoSetup& s, const RunOptions& opts, const std::st
       static_cast<long>(std::ceil(std::log(s.phi_end / s.gas.phi) / -std::log(shrink_per_step)));
   const long total_steps = compress_steps + s.relax_steps;
   const double d_mean = s.d_mean();
-  // A checkpoint stores the system's exact state and changes nothing in it, so the run does
-  // not depend on checkpoint_every and a resumed run repeats the uninterrupted one bit for bit.
-  auto save_checkpoint = [&]() {
-    H5Writer out(checkpoint);
-    write_restart(out, "/restart", sys);
-    series.write(out, "/series");
-    out.commit();
-  };
   try {
     if (series.col.empty()) series.add(sys, sys.measure(), d_mean, 0);
-    snapshots.sample(sys);
+    framed = sample_frame(snapshots, sys);
     Progress progress("isotropic compression", total_steps - step0, opts.progress);
     while (sys.steps() < total_steps) {
       const bool compressing = sys.steps() < compress_steps;
@@ -254,13 +290,13 @@ bool compress_and_relax(const IsoSetup& s, const RunOptions& opts, const std::st
       const Measurements m = sys.measure();
       sys.check_health(m);
       series.add(sys, m, d_mean, compressing ? 0 : 1);
-      snapshots.sample(sys);
+      framed = sample_frame(snapshots, sys);
       char extra[96];
       std::snprintf(extra, sizeof extra, "phi %.4f  P* %.2e  Z %.2f", m.phi,
                     m.pressure * d_mean / s.kn, m.z_corrected);
       progress.update(sys.steps() - step0, extra);
       if (sys.steps() / s.checkpoint_every != (sys.steps() - n) / s.checkpoint_every)
-        save_checkpoint();
+        save_checkpoint(checkpoint, sys, series);
       if (s.stop_after > 0 && sys.steps() >= s.stop_after) {
         std::cerr << "stopped after step " << sys.steps()
                   << " (run.stop_after); continue with --resume\n";
@@ -268,38 +304,58 @@ bool compress_and_relax(const IsoSetup& s, const RunOptions& opts, const std::st
       }
     }
   } catch (const PhysicsError&) {
-    H5Writer out(opts.out_dir + "/last_state.h5");
-    write_state(out, "/state", sys.particles(), sys.box(), s.gas.density);
-    out.commit();
-    write_xdmf(opts.out_dir + "/last_state.xdmf", "last_state.h5",
-               {state_frame("/state", sys.particles().n)}, false);
-    try {  // the frames up to the failure show how it came about
-      snapshots.finish(sys);
-    } catch (const std::exception& e) {
-      std::cerr << "warning: snapshot series not written: " << e.what() << "\n";
-    }
+    leave_last_state(s, opts, sys, snapshots);
     throw;
   }
   return true;
 }
 
+// A complete run: the series, the end state and its figures, and the snapshot series' closing
+// frame where its last frame is not the end state.
+struct IsoRun {
+  Series series;
+  Particles<Exec> final_state;  // the system's particle arrays at the end
+  PeriodicBox box;
+  Measurements fin;
+  long steps = 0, neighbor_builds = 0;
+  double time = 0;
+  std::optional<SnapshotFrame> closing_frame;
+};
+
+// Makes the system (afresh or from the checkpoint), compresses and relaxes it and returns the
+// run; nothing when it stopped at run.stop_after.
+std::optional<IsoRun> run_compression(const IsoSetup& s, const RunOptions& opts,
+                                      const std::string& checkpoint, SnapshotSeries& snapshots) {
+  IsoRun run;
+  System sys = make_system(s, opts.resume, checkpoint, run.series);
+  bool framed = false;
+  if (!compress_and_relax(s, opts, checkpoint, sys, run.series, snapshots, framed))
+    return std::nullopt;
+  run.fin = sys.measure();
+  run.steps = sys.steps(), run.time = sys.time();
+  run.neighbor_builds = sys.neighbor_list().builds();
+  run.final_state = sys.particles(), run.box = sys.box();
+  if (snapshots.enabled() && !framed) run.closing_frame = snapshots.frame_with_contacts(sys);
+  return run;
+}
+
 // The end state's figures in summary.json.
-Json final_results(const IsoSetup& s, const System& sys, const Measurements& fin,
-                   const Series& series) {
+Json final_results(const IsoSetup& s, const IsoRun& run) {
   const double d_mean = s.d_mean();
+  const Measurements& fin = run.fin;
   // Volume fraction where a finite pressure first appears (P* > 1e-5) during compression.
-  const auto& phi = series.col.at("phi");
-  const auto& pstar = series.col.at("pressure_star");
+  const auto& phi = run.series.col.at("phi");
+  const auto& pstar = run.series.col.at("pressure_star");
   double phi_onset = NAN;
   for (size_t i = 0; i < phi.size(); ++i)
-    if (series.col.at("phase")[i] == 0 && pstar[i] > 1e-5) {
+    if (run.series.col.at("phase")[i] == 0 && pstar[i] > 1e-5) {
       phi_onset = phi[i];
       break;
     }
   Json res = Json::object();
   res["particles"] = s.gas.count;
-  res["steps"] = sys.steps();
-  res["simulated_time"] = sys.time();
+  res["steps"] = run.steps;
+  res["simulated_time"] = run.time;
   res["phi_final"] = fin.phi;
   res["pressure_final"] = fin.pressure;
   res["pressure_star_final"] = fin.pressure * d_mean / s.kn;
@@ -310,11 +366,33 @@ Json final_results(const IsoSetup& s, const System& sys, const Measurements& fin
       fin.epot > 0 ? Json(fin.ekin / fin.epot) : Json();  // undefined in a gas
   res["max_overlap_final"] = fin.max_overlap;
   res["phi_pressure_onset"] = std::isnan(phi_onset) ? Json() : Json(phi_onset);  // none reached
-  res["neighbor_builds"] = sys.neighbor_list().builds();
+  res["neighbor_builds"] = run.neighbor_builds;
   // Volumetric inertial number at the end of compression, I_v = rate <d> sqrt(rho / P).
   res["inertial_number_final"] =  // undefined without pressure
       fin.pressure > 0 ? Json(s.rate * d_mean * std::sqrt(s.gas.density / fin.pressure)) : Json();
   return res;
+}
+
+// results.h5 (the series, the end state, the scene's constants) and the end state's XDMF file,
+// then the snapshot series closed with its last frame, then summary.json.
+void write_run(const SceneFile& scene, const RunOptions& opts, const IsoSetup& s, const IsoRun& run,
+               SnapshotSeries& snapshots) {
+  SceneOutput output(scene, opts, "isotropic_compression");
+  H5Writer& h5 = output.h5();
+  run.series.write(h5, "/series");
+  write_state(h5, "/final_state", run.final_state, run.box, s.gas.density);
+  h5.attribute("/", "scene", std::string("isotropic_compression"));
+  h5.attribute("/", "kn", s.kn);
+  h5.attribute("/", "mean_diameter", s.d_mean());
+  output.commit_results();
+  write_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5",
+             {state_frame("/final_state", run.final_state.n)}, false);
+  if (snapshots.enabled()) {
+    if (run.closing_frame) snapshots.append(*run.closing_frame);
+    snapshots.commit();
+  }
+  output.summary()["results"] = final_results(s, run);
+  output.finish();
 }
 
 }  // namespace
@@ -329,28 +407,12 @@ void run_isotropic_compression(const SceneFile& scene, const RunOptions& opts) {
   const std::string checkpoint = opts.out_dir + "/checkpoint.h5";
   require_checkpoint_to_resume(opts, checkpoint);
   if (!begin_outputs(opts)) return;
-
-  Series series;
-  System sys = make_system(s, opts.resume, checkpoint, series);
-  // A resumed run's series starts where it resumed; an interrupted one leaves none.
+  // A resumed run's snapshot series starts where it resumed; an interrupted one leaves none.
   SnapshotSeries snapshots(opts.out_dir, "snapshots", s.snapshot_every);
   snapshots.record_contacts(s.with_contacts);
-  if (!compress_and_relax(s, opts, checkpoint, sys, series, snapshots)) return;
-
-  const Measurements fin = sys.measure();
-  SceneOutput output(scene, opts, "isotropic_compression");
-  H5Writer& h5 = output.h5();
-  series.write(h5, "/series");
-  write_state(h5, "/final_state", sys.particles(), sys.box(), s.gas.density);
-  h5.attribute("/", "scene", std::string("isotropic_compression"));
-  h5.attribute("/", "kn", s.kn);
-  h5.attribute("/", "mean_diameter", s.d_mean());
-  output.commit_results();
-  write_xdmf(opts.out_dir + "/final_state.xdmf", "results.h5",
-             {state_frame("/final_state", sys.particles().n)}, false);
-  snapshots.finish(sys);
-  output.summary()["results"] = final_results(s, sys, fin, series);
-  output.finish();
+  const std::optional<IsoRun> run = run_compression(s, opts, checkpoint, snapshots);
+  if (!run) return;  // stopped at run.stop_after, the checkpoint left behind
+  write_run(scene, opts, s, *run, snapshots);
   std::error_code ec;
   std::filesystem::remove(checkpoint, ec);  // the run is complete: results.h5 supersedes it
 }
