@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
@@ -201,14 +202,49 @@ DemSystem<Exec, Model> settling_system(const Model& model, const Setup& c, const
   return sys;
 }
 
+// The settled packing the compressions start from (at rest), and the preparation's figures.
+struct Preparation {
+  ConfigState state;
+  long settle_steps = 0;  // settling, closing the box and settling again
+  double pile_height = 0, top_wall_force = 0, volume_fraction = 0;
+  double wall_seconds = 0;
+};
+
+// Closes the box: the top wall comes down from the top of the insertion region to the box
+// height at the compression speed (a pile standing higher is pressed down to it), then the
+// packing settles again. Returns the steps it took.
+template <class System, class Settled>
+long close_box(System& sys, const Setup& c, const Settled& settled, long max_steps) {
+  auto walls = box_walls(c, c.region_height);
+  const double travel = c.region_height - c.size[2], t_now = sys.time();
+  walls.back().motion = WallMotion::Table;
+  walls.back().table_t = {t_now, t_now + travel / c.wall_speed + c.dt};
+  walls.back().table_u = {0.0, -travel};
+  sys.set_walls(walls);
+  const long close_steps = static_cast<long>(std::ceil((travel / c.wall_speed + c.dt) / c.dt));
+  sys.step(close_steps);
+  sys.check_health(sys.measure());
+  const long steps2 = settle(
+      [&](long n) {
+        sys.step(n);
+        sys.check_health(sys.measure());
+      },
+      settled, 1000, max_steps);
+  if (steps2 < 0)
+    throw PhysicsError("the packing did not settle after closing the box within fill.max_time = " +
+                       std::to_string(c.settle_max_time) + ": raise it");
+  return close_steps + steps2;
+}
+
 template <class Model>
-ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, Json& out) {
+Preparation prepare(const Model& model, const Setup& c, const RunOptions& opts) {
   const Pour p = pour(c);
   const HostParticles& h = p.h;
   const double mean_mass = p.mean_mass, mean_d = p.mean_d;
   DemSystem<Exec, Model> sys = settling_system(model, c, p);
   // Settled: mean kinetic energy per particle below ratio x (mean weight x mean diameter).
   const double e_ref = mean_mass * std::max(c.gravity, 1e-300) * mean_d;
+  const auto settled = [&]() { return sys.measure().ekin / h.size() < c.settle_ratio * e_ref; };
   const long max_steps = static_cast<long>(c.settle_max_time / c.dt);
   // Not settled before the highest particle could have landed: 1.5 free-fall times of the
   // region (the balls are inserted at rest, so the criterion holds at the start).
@@ -224,60 +260,107 @@ ConfigState prepare(const Model& model, const Setup& c, const RunOptions& opts, 
         sys.check_health(sys.measure());
         progress.update(sys.steps());
       },
-      [&]() { return sys.measure().ekin / h.size() < c.settle_ratio * e_ref; }, 1000, max_steps,
-      fall_steps);
+      settled, 1000, max_steps, fall_steps);
   progress.finish();
   if (steps < 0)
     throw PhysicsError("the poured packing did not settle within fill.max_time = " +
                        std::to_string(c.settle_max_time) +
                        ": raise it, or shorten fill.damping_time");
-  // Close the box: the top wall comes down from the top of the insertion region to the box
-  // height at the compression speed (a pile standing higher is pressed down to it), then
-  // the packing settles again.
-  auto walls = box_walls(c, c.region_height);
-  const double travel = c.region_height - c.size[2], t_now = sys.time();
-  walls.back().motion = WallMotion::Table;
-  walls.back().table_t = {t_now, t_now + travel / c.wall_speed + c.dt};
-  walls.back().table_u = {0.0, -travel};
-  sys.set_walls(walls);
-  const long close_steps = static_cast<long>(std::ceil((travel / c.wall_speed + c.dt) / c.dt));
-  sys.step(close_steps);
-  sys.check_health(sys.measure());
-  const long steps2 = settle(
-      [&](long n) {
-        sys.step(n);
-        sys.check_health(sys.measure());
-      },
-      [&]() { return sys.measure().ekin / h.size() < c.settle_ratio * e_ref; }, 1000, max_steps);
-  if (steps2 < 0)
-    throw PhysicsError("the packing did not settle after closing the box within fill.max_time = " +
-                       std::to_string(c.settle_max_time) + ": raise it");
+  Preparation prep;
+  prep.settle_steps = steps + close_box(sys, c, settled, max_steps);
   std::vector<double> density(h.density);
-  ConfigState state = snapshot(sys, density, 0.0);
-  double top = 0;
+  prep.state = snapshot(sys, density, 0.0);
+  ConfigState& state = prep.state;
   for (int i = 0; i < state.size(); ++i)
-    top = std::max(top, state.particles.z[i] + state.particles.radius[i]);
-  out["settle_steps"] = steps + close_steps + steps2;
-  out["pile_height"] = top;
-  out["top_wall_force_at_start"] = sys.wall_loads().back().force[2];
-  out["volume_fraction_box"] = sys.particle_volume() / (c.size[0] * c.size[1] * c.size[2]);
+    prep.pile_height = std::max(prep.pile_height, state.particles.z[i] + state.particles.radius[i]);
+  prep.top_wall_force = sys.wall_loads().back().force[2];
+  prep.volume_fraction = sys.particle_volume() / (c.size[0] * c.size[1] * c.size[2]);
   for (int i = 0; i < state.size(); ++i)  // start the compression from rest
     state.particles.vx[i] = state.particles.vy[i] = state.particles.vz[i] = 0;
   std::fill(state.w.begin(), state.w.end(), 0.0);
-  return state;
+  return prep;
+}
+
+// The preparation under its kernel-timer phase, with its wall-clock time.
+Preparation prepare_packing(const Setup& c, const RunOptions& opts) {
+  Preparation prep;
+  const auto t0 = std::chrono::steady_clock::now();
+  {
+    KernelRegion region("preparation");
+    with_material_model(c.mats, [&](const auto& m) { prep = prepare(m, c, opts); });
+  }
+  prep.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return prep;
+}
+
+// The most compressed state of the first model's run: a copy of the particles (the system
+// goes on moving its own), the box and the six walls as quads.
+struct CompressedState {
+  Particles<Exec> particles;
+  PeriodicBox box;
+  std::vector<double> quads;
+};
+
+template <class System>
+CompressedState compressed_state(const System& sys) {
+  const Particles<Exec>& p = sys.particles();
+  CompressedState s;
+  s.particles = Particles<Exec>(p.n);
+  Particles<Exec>& q = s.particles;
+  for (auto [to, from] : {std::pair(q.x, p.x), std::pair(q.v, p.v), std::pair(q.w, p.w),
+                          std::pair(q.f, p.f), std::pair(q.torque, p.torque)})
+    Kokkos::deep_copy(to, from);
+  for (auto [to, from] :
+       {std::pair(q.radius, p.radius), std::pair(q.mass, p.mass), std::pair(q.inertia, p.inertia)})
+    Kokkos::deep_copy(to, from);
+  Kokkos::deep_copy(q.species, p.species);
+  Kokkos::deep_copy(q.id, p.id);
+  s.box = sys.box();
+  for (const auto& w : sys.walls().specs()) {
+    double x[3], v[3];
+    w.state(sys.time(), x, v);
+    const auto quad = wall_quad(w.normal, x, sys.box());
+    s.quads.insert(s.quads.end(), quad.begin(), quad.end());
+  }
+  return s;
 }
 
 struct Curve {
   std::vector<double> time, strain, force, position;
   double wall_seconds = 0, max_force = 0;
   long steps = 0;
-  std::string failure;  // why the run stopped early (empty: it finished)
-  WallSeries walls;     // every wall's position, force, torque and contacts
+  std::string failure;                        // why the run stopped early (empty: it finished)
+  WallSeries walls;                           // every wall's position, force, torque and contacts
+  std::optional<CompressedState> compressed;  // where kept and reached
 };
 
+// One sample of the walls: every wall's position, force, torque and contacts, and the top
+// wall's position, strain and force (pushed up by the particles: positive).
+template <class System>
+void sample_walls(const System& sys, double H, Curve& out) {
+  const auto loads = sys.wall_loads();
+  const double z = sys.walls().host()(5).p[2];
+  out.walls.time.push_back(sys.time());
+  for (size_t w = 0; w < loads.size(); ++w) {
+    for (int d = 0; d < 3; ++d) {
+      out.walls.position[w].push_back(sys.walls().host()(w).p[d]);
+      out.walls.force[w].push_back(loads[w].force[d]);
+      out.walls.torque[w].push_back(loads[w].torque[d]);
+    }
+    out.walls.contacts[w].push_back(loads[w].contacts);
+  }
+  out.time.push_back(sys.time());
+  out.position.push_back(z);
+  out.strain.push_back((H - z) / H);
+  out.force.push_back(loads[5].force[2]);
+  out.max_force = std::max(out.max_force, loads[5].force[2]);
+}
+
+// One force model's compression and decompression from the settled packing; `keep_compressed`:
+// the curve keeps the most compressed state.
 template <class Model>
 Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const ConfigState& st,
-               const std::string& label, const RunOptions& opts, H5Writer* snap) {
+               const std::string& label, const RunOptions& opts, bool keep_compressed) {
   DemParams prm;
   prm.dt_key = "compression.time_step";
   prm.dt = c.dt, prm.skin = 0.1 * c.fill.diameter_mean, prm.max_overlap = c.max_overlap;
@@ -298,32 +381,13 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
   Curve out;
   out.walls.resize(walls);
   Progress progress(label, steps, opts.progress);
-  auto sample = [&]() {
-    const auto loads = sys.wall_loads();
-    const double z = sys.walls().host()(5).p[2];
-    out.walls.time.push_back(sys.time());
-    for (size_t w = 0; w < loads.size(); ++w) {
-      for (int d = 0; d < 3; ++d) {
-        out.walls.position[w].push_back(sys.walls().host()(w).p[d]);
-        out.walls.force[w].push_back(loads[w].force[d]);
-        out.walls.torque[w].push_back(loads[w].torque[d]);
-      }
-      out.walls.contacts[w].push_back(loads[w].contacts);
-    }
-    out.time.push_back(sys.time());
-    out.position.push_back(z);
-    out.strain.push_back((H - z) / H);
-    out.force.push_back(loads[5].force[2]);  // pushed up by the particles: positive
-    out.max_force = std::max(out.max_force, loads[5].force[2]);
-  };
   // Frames at the first sample at or after every k steps, one series per model.
   SnapshotSeries series(opts.out_dir, "snapshots_" + label, c.snapshot_every);
   // The kernel timer's phase spans exactly what wall_seconds times.
   std::optional<KernelRegion> region(std::in_place, "compression " + label);
   const auto t0 = std::chrono::steady_clock::now();
-  sample();
+  sample_walls(sys, H, out);
   series.sample(sys);
-  bool snapped = false;
   for (long s = 0; s < steps; s += c.sample_every) {
     sys.step(std::min(c.sample_every, steps - s));
     // A model that breaks down (MC-strain's explicit feedback at large loads) ends its own
@@ -334,22 +398,11 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
       out.failure = e.what();
       break;
     }
-    sample();
+    sample_walls(sys, H, out);
     series.sample(sys);
     progress.update(sys.steps());
-    if (snap && !snapped && sys.time() >= t_half) {  // the most compressed state
-      write_state(*snap, "/snapshot", sys.particles(), sys.box(), c.fill.density);
-      std::vector<double> quads;
-      for (const auto& w : sys.walls().specs()) {
-        double x[3], v[3];
-        w.state(sys.time(), x, v);
-        const auto q = wall_quad(w.normal, x, sys.box());
-        quads.insert(quads.end(), q.begin(), q.end());
-      }
-      write_quantity(*snap, "/snapshot_walls/quads", quads, "mm",
-                     {static_cast<hsize_t>(quads.size() / 3), 3});
-      snapped = true;
-    }
+    if (keep_compressed && !out.compressed && sys.time() >= t_half)
+      out.compressed = compressed_state(sys);
   }
   out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   region.reset();
@@ -359,57 +412,74 @@ Curve compress(const Model& model, const MultiContact& mc, const Setup& c, const
   return out;
 }
 
-}  // namespace
+// The curve's lines on stdout.
+void report_curve(const std::string& label, const Curve& curve) {
+  std::cout << label << ": largest top-wall force " << curve.max_force << " N, "
+            << curve.wall_seconds << " s wall clock (" << curve.steps << " steps)\n";
+  if (!curve.failure.empty())
+    std::cout << "  stopped at strain " << curve.strain.back() << ": " << curve.failure << "\n";
+}
 
-void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
-  const Setup c = read_setup(scene);
-  check_first_system(scene, opts, [&] {
-    with_material_model(c.mats, [&](const auto& m) { settling_system(m, c, pour(c)); });
-  });
-  if (!begin_outputs(opts)) return;
-  SceneOutput output(scene, opts, "confined_compression");
-  H5Writer& h5 = output.h5();
-  Json& summary = output.summary();
-  Json prep = Json::object();
-  ConfigState state;
-  const auto t0 = std::chrono::steady_clock::now();
-  {
-    KernelRegion region("preparation");
-    with_material_model(c.mats, [&](const auto& m) { state = prepare(m, c, opts, prep); });
-  }
-  prep["wall_seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  summary["preparation"] = prep;
-  Json models = Json::object();
+// One curve per force model of c.models, in order, each from the same settled packing; the
+// first keeps its most compressed state.
+std::vector<Curve> compress_all(const Setup& c, const ConfigState& state, const RunOptions& opts) {
+  std::vector<Curve> curves;
   for (size_t k = 0; k < c.models.size(); ++k) {
     const SoftModel& sm = c.models[k];
     Curve curve;
     with_material_model(c.mats, [&](const auto& m) {
-      curve = compress(m, sm.mc, c, state, sm.label, opts, k == 0 ? &h5 : nullptr);
+      curve = compress(m, sm.mc, c, state, sm.label, opts, k == 0);
     });
-    const std::string g = "/runs/" + sm.label;
-    write_quantity(h5, g + "/time", curve.time, "us");
-    write_quantity(h5, g + "/strain", curve.strain, "1");
-    write_quantity(h5, g + "/top_wall_force", curve.force, "N");
-    write_quantity(h5, g + "/top_wall_position", curve.position, "mm");
-    h5.attribute(g, "wall_seconds", curve.wall_seconds);
-    curve.walls.write(h5, g + "/walls");
-    Json j = Json::object();
-    j["max_force"] = curve.max_force;
-    j["wall_seconds"] = curve.wall_seconds;
-    j["steps"] = curve.steps;
-    j["particle_steps_per_second"] = curve.steps * c.fill.count / curve.wall_seconds;
-    if (!curve.failure.empty()) {
-      j["failure"] = curve.failure;
-      j["failed_at_strain"] = curve.strain.back();
-      j["failed_on_loading"] = curve.time.back() <= c.strain * c.size[2] / c.wall_speed;
-      h5.attribute(g, "failure", curve.failure);
+    report_curve(sm.label, curve);
+    curves.push_back(std::move(curve));
+  }
+  return curves;
+}
+
+// A curve's series and attributes under /runs/<label> in results.h5; its figures for the summary.
+Json write_curve(H5Writer& h5, const Setup& c, const std::string& label, const Curve& curve) {
+  const std::string g = "/runs/" + label;
+  write_quantity(h5, g + "/time", curve.time, "us");
+  write_quantity(h5, g + "/strain", curve.strain, "1");
+  write_quantity(h5, g + "/top_wall_force", curve.force, "N");
+  write_quantity(h5, g + "/top_wall_position", curve.position, "mm");
+  h5.attribute(g, "wall_seconds", curve.wall_seconds);
+  curve.walls.write(h5, g + "/walls");
+  Json j = Json::object();
+  j["max_force"] = curve.max_force;
+  j["wall_seconds"] = curve.wall_seconds;
+  j["steps"] = curve.steps;
+  j["particle_steps_per_second"] = curve.steps * c.fill.count / curve.wall_seconds;
+  if (!curve.failure.empty()) {
+    j["failure"] = curve.failure;
+    j["failed_at_strain"] = curve.strain.back();
+    j["failed_on_loading"] = curve.time.back() <= c.strain * c.size[2] / c.wall_speed;
+    h5.attribute(g, "failure", curve.failure);
+  }
+  return j;
+}
+
+// results.h5 (the most compressed state, each curve, the study's constants) and its XDMF file
+// of the compressed state, and summary.json (the preparation, each model, the experiment).
+void write_study(SceneOutput& output, const RunOptions& opts, const Setup& c,
+                 const Preparation& prep, const std::vector<Curve>& curves) {
+  H5Writer& h5 = output.h5();
+  Json& summary = output.summary();
+  Json jp = Json::object();
+  jp["settle_steps"] = prep.settle_steps;
+  jp["pile_height"] = prep.pile_height;
+  jp["top_wall_force_at_start"] = prep.top_wall_force;
+  jp["volume_fraction_box"] = prep.volume_fraction;
+  jp["wall_seconds"] = prep.wall_seconds;
+  summary["preparation"] = jp;
+  Json models = Json::object();
+  for (size_t k = 0; k < curves.size(); ++k) {
+    if (const auto& s = curves[k].compressed) {
+      write_state(h5, "/snapshot", s->particles, s->box, c.fill.density);
+      write_quantity(h5, "/snapshot_walls/quads", s->quads, "mm",
+                     {static_cast<hsize_t>(s->quads.size() / 3), 3});
     }
-    models[sm.label] = j;
-    std::cout << sm.label << ": largest top-wall force " << curve.max_force << " N, "
-              << curve.wall_seconds << " s wall clock (" << curve.steps << " steps)\n";
-    if (!curve.failure.empty())
-      std::cout << "  stopped at strain " << curve.strain.back() << ": " << curve.failure << "\n";
+    models[c.models[k].label] = write_curve(h5, c, c.models[k].label, curves[k]);
   }
   summary["models"] = models;
   if (c.experiment_force > 0) {
@@ -420,12 +490,24 @@ void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
   h5.attribute("/", "experiment_max_force", c.experiment_force);
   h5.attribute("/", "experiment_strain", c.experiment_strain);
   output.commit_results();
-  {  // the compressed state with its six walls
-    XdmfFrame scene_frame = state_frame("/snapshot", c.fill.count);
-    scene_frame.name = "scene", scene_frame.nwalls = 6;
-    scene_frame.wall_dataset = "/snapshot_walls/quads";
-    write_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", {scene_frame}, false);
-  }
+  XdmfFrame scene_frame = state_frame("/snapshot", c.fill.count);  // with its six walls
+  scene_frame.name = "scene", scene_frame.nwalls = 6;
+  scene_frame.wall_dataset = "/snapshot_walls/quads";
+  write_xdmf(opts.out_dir + "/compressed_state.xdmf", "results.h5", {scene_frame}, false);
+}
+
+}  // namespace
+
+void run_confined_compression(const SceneFile& scene, const RunOptions& opts) {
+  const Setup c = read_setup(scene);
+  check_first_system(scene, opts, [&] {
+    with_material_model(c.mats, [&](const auto& m) { settling_system(m, c, pour(c)); });
+  });
+  if (!begin_outputs(opts)) return;
+  const Preparation prep = prepare_packing(c, opts);
+  const std::vector<Curve> curves = compress_all(c, prep.state, opts);
+  SceneOutput output(scene, opts, "confined_compression");
+  write_study(output, opts, c, prep, curves);
   output.finish();
 }
 
