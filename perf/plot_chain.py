@@ -45,7 +45,7 @@ a1.legend(fontsize=7)
 a2.legend(fontsize=7)
 save(fig, "chain_error_vs_cost.png")
 
-fig, ax = plt.subplots(figsize=(4.8, 3.4))
+fig, ax = plt.subplots(figsize=(6.4, 3.6))
 labels, values = [], []
 for run in runs:
     threads = run["machine"]["kokkos_concurrency"]
@@ -53,7 +53,7 @@ for run in runs:
         if "refused" in row:
             continue
         # Older result files name the law "kernel"; newer ones name law and kernel.
-        name = f"{row['law']} {row['kernel']}" if "law" in row else row["kernel"]
+        name = f"{row['law']}\n{row['kernel']}" if "law" in row else row["kernel"]
         labels.append(f"{name}\n{threads} thr")
         values.append(row["median_bead_steps_per_second"] / 1e6)
 ax.bar(range(len(values)), values)
