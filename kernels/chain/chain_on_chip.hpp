@@ -60,7 +60,9 @@ struct ChainOnChipThread {
                                          double drift, bool store, const Field& a, int r, int i0) {
     for (int j = 0; j < B; ++j)
       if (j < n) {
-        const double fr = (j + 1 < B && j + 1 < n) ? f[j + 1 < B ? j + 1 : 0] : f_right;
+        // j + 1 < n implies j + 1 < B (n <= B); the inner bound only keeps the unrolled
+        // index of the last lane inside the array.
+        const double fr = j + 1 < n ? f[j + 1 < B ? j + 1 : j] : f_right;
         const double acc = (f[j] - fr) / b[j];
         v[j] += kick * acc;
         u[j] += drift * v[j];
