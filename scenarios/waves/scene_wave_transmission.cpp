@@ -12,6 +12,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -365,17 +366,11 @@ struct WaveRecord {
   double seconds = 0;
 };
 
-template <class Model>
-WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& p,
-                        const PeriodicBox& box, double amplitude, double dt,
-                        SnapshotSeries* snapshots = nullptr) {
-  WaveSetup wd = w;
-  wd.dt = dt;
-  DemSystem<Exec, Model> sys(particles_from<Exec>(p.state), box, model, params_of(wd, 0.0, 1.0));
-  restore_history(sys, p.state);
-  auto walls = column_walls(w, box, p.xs);
-  // The pulse as a displacement table fine enough that its piecewise-constant velocity
-  // follows the shape (400 points over the pulse).
+// The column's walls, the source wall driven by the pulse as a displacement table fine enough
+// that its piecewise-constant velocity follows the shape (400 points over the pulse).
+std::vector<WallSpec> pulse_walls(const WaveSetup& w, const PeriodicBox& box, double xs,
+                                  double amplitude) {
+  auto walls = column_walls(w, box, xs);
   WallSpec& s = walls[0];
   s.motion = WallMotion::Table;
   const int np = 400;
@@ -386,24 +381,42 @@ WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& 
     s.table_t.push_back(t);
     s.table_u.push_back(-pulse_displacement(w, amplitude, t));  // along the outward normal
   }
-  sys.set_walls(walls);
-  const double area = box.len[1] * box.len[2];
-  // Slab membership by identity, fixed at the start (displacements are far below d).
-  WaveRecord r;
+  return walls;
+}
+
+// Slab membership by identity, fixed at the start (displacements are far below d): the
+// identities in each receiver slab; the slabs' centres (distance from the source wall) go
+// into r.slab_x.
+template <class System>
+std::vector<std::vector<int>> slab_members(const System& sys, const WaveSetup& w, const Prepared& p,
+                                           WaveRecord& r) {
   std::vector<std::vector<int>> member(w.slab_positions.size());
-  {
-    auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().x);
-    auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().id);
-    for (size_t k = 0; k < w.slab_positions.size(); ++k) {
-      const double c = p.xs + w.slab_positions[k] * p.gap, hw = 0.5 * w.slab_width * w.diameter;
-      r.slab_x.push_back(c - p.xs);
-      for (int i = 0; i < sys.particles().n; ++i)
-        if (std::abs(x(i, 0) - c) <= hw) member[k].push_back(id(i));
-      if (member[k].empty())
-        throw InputError("receivers.slab_width: the slab at " +
-                         std::to_string(w.slab_positions[k]) + " L holds no particle");
-    }
+  auto x = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().x);
+  auto id = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.particles().id);
+  for (size_t k = 0; k < w.slab_positions.size(); ++k) {
+    const double c = p.xs + w.slab_positions[k] * p.gap, hw = 0.5 * w.slab_width * w.diameter;
+    r.slab_x.push_back(c - p.xs);
+    for (int i = 0; i < sys.particles().n; ++i)
+      if (std::abs(x(i, 0) - c) <= hw) member[k].push_back(id(i));
+    if (member[k].empty())
+      throw InputError("receivers.slab_width: the slab at " + std::to_string(w.slab_positions[k]) +
+                       " L holds no particle");
   }
+  return member;
+}
+
+template <class Model>
+WaveRecord transmit_raw(const Model& model, const WaveSetup& w, const Prepared& p,
+                        const PeriodicBox& box, double amplitude, double dt,
+                        SnapshotSeries* snapshots = nullptr) {
+  WaveSetup wd = w;
+  wd.dt = dt;
+  DemSystem<Exec, Model> sys(particles_from<Exec>(p.state), box, model, params_of(wd, 0.0, 1.0));
+  restore_history(sys, p.state);
+  sys.set_walls(pulse_walls(w, box, p.xs, amplitude));
+  const double area = box.len[1] * box.len[2];
+  WaveRecord r;
+  const std::vector<std::vector<int>> member = slab_members(sys, w, p, r);
   r.slabs.resize(member.size());
   std::vector<int> slab_of(sys.particles().n, -1);
   for (size_t k = 0; k < member.size(); ++k)
@@ -639,94 +652,73 @@ Pulses run_pulses(const WaveSetup& w, const Prepared& p, const PeriodicBox& box,
   return out;
 }
 
-// The reference run's source and receiver signals and spectra (the mirrored one's dominant
-// frequency returned) into `row` and the state's group `g`.
-double write_wall_signals(H5Writer& h5, const std::string& g, const WaveSetup& w, const Prepared& p,
-                          const Pulses& r, Json& row) {
-  const WaveRecord& ref = r.ref;
-  const Picks &pin = r.pin, &pout = r.pout;
-  double fdom_mirrored = NAN;
-  row["travel"] = travel_times(pin, pout, p.gap, p.rho_bulk, nullptr);
-  write_signal(h5, g + "/source", ref.source, pin, safe_spectrum(ref.source, pin, w.signals),
-               kVelocityTrace);
-  const Spectrum sf = safe_spectrum(ref.force, pout, w.signals);
-  write_signal(h5, g + "/receiver", ref.force, pout, sf, kStressTrace);
-  row["receiver_spectrum"] = spectrum_json(sf);
-  {  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
-     // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
-     // dominant frequency of its own: the receiver's rise time as a frequency.
-    SignalSettings mirrored = w.signals;
-    mirrored.spectrum.window = EventWindow::Mirrored;
-    const Spectrum sm = safe_spectrum(ref.force, pout, mirrored);
-    row["receiver_spectrum_mirrored"] = spectrum_json(sm);
-    fdom_mirrored = sm.dominant_frequency;
-    write_quantity(h5, g + "/receiver_mirrored/frequency", sm.f, frequency_unit(kStressTrace));
-    write_quantity(h5, g + "/receiver_mirrored/energy", sm.energy, energy_unit(kStressTrace));
-  }
-  return fdom_mirrored;
-}
+// What the reference pulse's signals say: the source's and the receiver's spectra (the
+// receiver's also mirrored), each slab's picks and spectrum, and the spectral ratio between the
+// first and the last slab.
+struct SignalAnalysis {
+  Spectrum source, receiver, mirrored;
+  std::vector<Picks> slab_picks;
+  std::vector<Spectrum> slab_spectra;
+  std::optional<SpectralRatioFit> ratio;  // with two slabs or more, where the fit succeeds
+  std::string ratio_failure;              // why it failed, where it did
+};
 
-// Slabs: travel times, spectra, Q between the first and the last, into `row` and `g`.
-void analyse_slabs(H5Writer& h5, const std::string& g, const WaveSetup& w, const Prepared& p,
-                   const Pulses& r, Json& row, double& q, double& qerr) {
+SignalAnalysis analyse_signals(const WaveSetup& w, const Pulses& r) {
   const WaveRecord& ref = r.ref;
-  const Picks& pin = r.pin;
-  std::vector<Picks> ps;
-  Json slabs = Json::array();
+  SignalAnalysis a;
+  a.source = safe_spectrum(ref.source, r.pin, w.signals);
+  a.receiver = safe_spectrum(ref.force, r.pout, w.signals);
+  // A one-signed first event has its largest |A| at f = 0; the spectrum of the signal up to
+  // its first peak, mirrored to a full period (docs/model_mixtures_and_waves.md §4), has a
+  // dominant frequency of its own: the receiver's rise time as a frequency.
+  SignalSettings mirrored = w.signals;
+  mirrored.spectrum.window = EventWindow::Mirrored;
+  a.mirrored = safe_spectrum(ref.force, r.pout, mirrored);
   for (size_t s = 0; s < ref.slabs.size(); ++s) {
-    ps.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
-    const Spectrum ss = safe_spectrum(ref.slabs[s], ps[s], w.signals);
-    write_signal(h5, g + "/slab_" + std::to_string(s), ref.slabs[s], ps[s], ss, kVelocityTrace);
-    h5.attribute(g + "/slab_" + std::to_string(s), "distance", ref.slab_x[s]);
-    Json sj = Json::object();
-    sj["distance"] = ref.slab_x[s];
-    sj["picks"] = picks_json(ps[s]);
-    sj["travel"] = travel_times(pin, ps[s], ref.slab_x[s], p.rho_bulk, nullptr);
-    sj["spectrum"] = spectrum_json(ss);
-    slabs.push(sj);
+    a.slab_picks.push_back(pick_travel_times(ref.slabs[s], w.signals.picker));
+    a.slab_spectra.push_back(safe_spectrum(ref.slabs[s], a.slab_picks[s], w.signals));
   }
-  row["slabs"] = slabs;
   if (ref.slabs.size() >= 2) {
     const size_t last = ref.slabs.size() - 1;
-    // Velocity between the slabs (no wall in the path) by each picker
-    Json between = Json::object();
-    for (const char* pk : kPickers) {
-      const double dtp = picked_time(ps[last], pk) - picked_time(ps[0], pk);
-      const double dx = ref.slab_x[last] - ref.slab_x[0];
-      between[pk] = std::isfinite(dtp) && dtp > 0 ? Json(dx / dtp) : Json();
-    }
-    row["V_p_between_slabs"] = between;
     try {
-      const SpectralRatioFit f =
-          analyse_ratio(ref.slabs[0], ps[0], ref.slabs[last], ps[last], w.signals);
-      row["spectral_ratio"] = ratio_json(f);
-      write_quantity(h5, g + "/ratio/frequency", f.f, frequency_unit(kVelocityTrace));
-      write_quantity(h5, g + "/ratio/log_ratio", f.log_ratio, "1");  // ln(A2/A1)
-      h5.attribute(g + "/ratio", "slope", f.slope);
-      h5.attribute(g + "/ratio", "intercept", f.intercept);
-      q = f.q, qerr = f.q_error;
+      a.ratio = analyse_ratio(ref.slabs[0], a.slab_picks[0], ref.slabs[last], a.slab_picks[last],
+                              w.signals);
     } catch (const std::exception& e) {
-      row["spectral_ratio"] = std::string("failed: ") + e.what();
+      a.ratio_failure = e.what();
     }
   }
+  return a;
 }
 
-// Numerics: the reference pulse against smaller time steps and other contact damping.
-void numerics_checks(const WaveSetup& w, const Prepared& p, const PeriodicBox& box,
-                     const WaveRecord& ref, Json& row) {
-  // Numerics: travel time and Q against the time step, and against contact damping (how
-  // much of Q is the contacts' dissipation rather than scattering).
-  Json dts = Json::array();
+// Numerics: travel time and Q against the time step, and against contact damping (how much
+// of Q is the contacts' dissipation rather than scattering), with the reference pulse's run
+// in the same form for the charts.
+struct Numerics {
+  Json dt_check = Json::array(), restitution_check = Json::array(), reference;
+};
+
+Json reference_numerics(const WaveSetup& w, const Prepared& p, const WaveRecord& ref) {
+  Json e = numerics_entry(ref, w, p);
+  e["dt"] = w.dt;
+  // Its restitution, when every material has the same one (a point of the damping check).
+  bool uniform = true;
+  for (const auto& mat : w.mats.materials)
+    uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
+  e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
+  return e;
+}
+
+Numerics numerics_checks(const WaveSetup& w, const Prepared& p, const PeriodicBox& box,
+                         const WaveRecord& ref) {
+  Numerics n;
   for (double fct : w.dt_check) {
     WaveRecord r;
     with_material_model(w.mats,
                         [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt * fct); });
     Json e = numerics_entry(r, w, p);
     e["dt"] = w.dt * fct;
-    dts.push(e);
+    n.dt_check.push(e);
   }
-  row["dt_check"] = dts;
-  Json rest = Json::array();
   for (double e_r : w.restitution_check) {
     MaterialSet mats = w.mats;
     for (auto& mat : mats.materials) mat.restitution = e_r;
@@ -734,27 +726,94 @@ void numerics_checks(const WaveSetup& w, const Prepared& p, const PeriodicBox& b
     with_material_model(mats, [&](const auto& m) { r = transmit(m, w, p, box, w.velocity, w.dt); });
     Json e = numerics_entry(r, w, p);
     e["restitution"] = e_r;
-    rest.push(e);
+    n.restitution_check.push(e);
   }
-  row["restitution_check"] = rest;
-  {  // the reference run in the same form, for the charts
-    Json e = numerics_entry(ref, w, p);
-    e["dt"] = w.dt;
-    // Its restitution, when every material has the same one (a point of the damping check).
-    bool uniform = true;
-    for (const auto& mat : w.mats.materials)
-      uniform = uniform && mat.restitution == w.mats.materials[0].restitution;
-    e["restitution"] = uniform ? Json(w.mats.materials[0].restitution) : Json();
-    row["reference_numerics"] = e;
-  }
+  n.reference = reference_numerics(w, p, ref);
+  return n;
 }
 
-// One prepared state's probe, pulses and analyses: its row of the summary's table and of the
-// columns of results.h5 (group g of results.h5 holds its signals).
-Json probed_row(const WaveSetup& w, const Prepared& p, const PeriodicBox& box, size_t k,
-                const RunOptions& opts, long snapshot_every, bool with_contacts, H5Writer& h5,
-                StateTable& columns) {
-  const std::string g = "/pressure_" + std::to_string(k);
+// ParaView time series of the reference pulse at each pressure (output.snapshot_every, 0:
+// none): frames at the first receiver sample at or after every k steps.
+struct SnapshotChoice {
+  long every = 0;
+  bool contacts = false;
+};
+
+// One prepared state probed: the static probe's modulus, the pulses, what their signals say,
+// the numerics checks, and the measures derived from them.
+struct ProbedState {
+  double m_probe = 0;
+  Pulses pulses;
+  SignalAnalysis signals;
+  Numerics numerics;
+  double m_wave = NAN;            // rho_bulk V_p^2, V_p by the first peak
+  double q = NAN, q_error = NAN;  // between the first and the last slab
+  // The pulse runs through the load-bearing skeleton, whose density is rho_bulk (1 - f), f
+  // the mass fraction of rattlers peeled below 2 contacts (skeleton.hpp: without gravity a
+  // particle with one contact carries no load). Peeling below 4 takes every particle of
+  // these frictional packings (Z = 4.1-4.3), so 4 is no criterion here.
+  double f_rattlers = 0;
+};
+
+ProbedState probe_state(const WaveSetup& w, const Prepared& p, const PeriodicBox& box, size_t k,
+                        const RunOptions& opts, const SnapshotChoice& snap) {
+  ProbedState s;
+  with_material_model(w.mats, [&](const auto& m) { s.m_probe = probe_m(m, w, p, box); });
+  s.pulses = run_pulses(w, p, box, k, opts, snap.every, snap.contacts);
+  s.signals = analyse_signals(w, s.pulses);
+  if (s.signals.ratio) s.q = s.signals.ratio->q, s.q_error = s.signals.ratio->q_error;
+  s.numerics = numerics_checks(w, p, box, s.pulses.ref);
+  s.m_wave = p.rho_bulk * s.pulses.vp_peak * s.pulses.vp_peak;
+  s.f_rattlers = rattler_mass_fraction(p.state, p.xs, box.len[0], 2);
+  std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << s.pulses.vp_peak
+            << " mm/us, M_wave = " << s.m_wave << " MPa, M_probe = " << s.m_probe
+            << " MPa, Q = " << s.q << "\n";
+  return s;
+}
+
+// Every state the servo reached probed, in order; a state it did not reach is not (no probe,
+// no pulse: its entry is empty).
+std::vector<std::optional<ProbedState>> probe_states(const WaveSetup& w,
+                                                     const std::vector<Prepared>& states,
+                                                     const PeriodicBox& box, const RunOptions& opts,
+                                                     const SnapshotChoice& snap) {
+  std::vector<std::optional<ProbedState>> probed;
+  for (size_t k = 0; k < states.size(); ++k) {
+    probed.emplace_back();
+    if (states[k].converged) probed.back() = probe_state(w, states[k], box, k, opts, snap);
+  }
+  return probed;
+}
+
+// The slabs' part of a state's row: each slab's picks, travel times and spectrum; with two
+// slabs or more, V_p between the first and the last by each picker, and their spectral ratio.
+void add_slab_rows(Json& row, const Prepared& p, const ProbedState& s) {
+  const WaveRecord& ref = s.pulses.ref;
+  const SignalAnalysis& a = s.signals;
+  Json slabs = Json::array();
+  for (size_t k = 0; k < ref.slabs.size(); ++k) {
+    Json sj = Json::object();
+    sj["distance"] = ref.slab_x[k];
+    sj["picks"] = picks_json(a.slab_picks[k]);
+    sj["travel"] = travel_times(s.pulses.pin, a.slab_picks[k], ref.slab_x[k], p.rho_bulk, nullptr);
+    sj["spectrum"] = spectrum_json(a.slab_spectra[k]);
+    slabs.push(sj);
+  }
+  row["slabs"] = slabs;
+  if (ref.slabs.size() < 2) return;
+  const size_t last = ref.slabs.size() - 1;
+  Json between = Json::object();  // no wall in the path
+  for (const char* pk : kPickers) {
+    const double dtp = picked_time(a.slab_picks[last], pk) - picked_time(a.slab_picks[0], pk);
+    const double dx = ref.slab_x[last] - ref.slab_x[0];
+    between[pk] = std::isfinite(dtp) && dtp > 0 ? Json(dx / dtp) : Json();
+  }
+  row["V_p_between_slabs"] = between;
+  row["spectral_ratio"] = a.ratio ? ratio_json(*a.ratio) : Json("failed: " + a.ratio_failure);
+}
+
+// A probed state's row of the summary's table.
+Json probed_row(const Prepared& p, const ProbedState& s) {
   Json row = Json::object();
   row["sigma_xx"] = p.pressure;
   row["gap"] = p.gap;
@@ -765,37 +824,50 @@ Json probed_row(const WaveSetup& w, const Prepared& p, const PeriodicBox& box, s
   row["z"] = p.z;
   row["max_overlap"] = p.max_overlap;
   row["preparation_steps"] = p.steps;
-  double m_probe = 0;
-  with_material_model(w.mats, [&](const auto& m) { m_probe = probe_m(m, w, p, box); });
-  row["M_probe"] = m_probe;
-  const Pulses pulses = run_pulses(w, p, box, k, opts, snapshot_every, with_contacts);
-  const double vp_peak = pulses.vp_peak;
-  row["amplitudes"] = pulses.amplitudes;
-  const double fdom_mirrored = write_wall_signals(h5, g, w, p, pulses, row);
-  double q = NAN, qerr = NAN;
-  analyse_slabs(h5, g, w, p, pulses, row, q, qerr);
-  numerics_checks(w, p, box, pulses.ref, row);
-  const double m_wave = p.rho_bulk * vp_peak * vp_peak;
+  row["M_probe"] = s.m_probe;
+  row["amplitudes"] = s.pulses.amplitudes;
+  row["travel"] = travel_times(s.pulses.pin, s.pulses.pout, p.gap, p.rho_bulk, nullptr);
+  row["receiver_spectrum"] = spectrum_json(s.signals.receiver);
+  row["receiver_spectrum_mirrored"] = spectrum_json(s.signals.mirrored);
+  add_slab_rows(row, p, s);
+  row["dt_check"] = s.numerics.dt_check;
+  row["restitution_check"] = s.numerics.restitution_check;
+  row["reference_numerics"] = s.numerics.reference;
   // No first peak (a run too short for the pulse to arrive): null, not NaN, in the JSON.
-  row["M_wave_first_peak"] = std::isfinite(m_wave) ? Json(m_wave) : Json();
-  row["M_wave_over_M_probe"] = std::isfinite(m_wave) ? Json(m_wave / m_probe) : Json();
-  // The pulse runs through the load-bearing skeleton, whose density is rho_bulk (1 - f), f
-  // the mass fraction of rattlers peeled below 2 contacts (skeleton.hpp: without gravity a
-  // particle with one contact carries no load). Peeling below 4 takes every particle of
-  // these frictional packings (Z = 4.1-4.3), so 4 is no criterion here.
-  const double f_rattlers = rattler_mass_fraction(p.state, p.xs, box.len[0], 2);
+  const bool arrived = std::isfinite(s.m_wave);
+  row["M_wave_first_peak"] = arrived ? Json(s.m_wave) : Json();
+  row["M_wave_over_M_probe"] = arrived ? Json(s.m_wave / s.m_probe) : Json();
   Json skeleton = Json::object();
-  skeleton["rattler_mass_fraction"] = f_rattlers;
+  skeleton["rattler_mass_fraction"] = s.f_rattlers;
   skeleton["M_wave_over_M_probe"] =
-      std::isfinite(m_wave) ? Json(m_wave * (1 - f_rattlers) / m_probe) : Json();
+      arrived ? Json(s.m_wave * (1 - s.f_rattlers) / s.m_probe) : Json();
   row["skeleton"] = skeleton;
-  std::cout << "sigma_xx = " << p.pressure << " MPa: V_p (first peak) = " << vp_peak
-            << " mm/us, M_wave = " << m_wave << " MPa, M_probe = " << m_probe << " MPa, Q = " << q
-            << "\n";
-  columns.add(p, vp_peak, m_wave, m_probe, q, qerr, fdom_mirrored);
+  return row;
+}
+
+// A probed state's signals, spectra and spectral ratio into its group g of results.h5.
+void write_state_signals(H5Writer& h5, const std::string& g, const Prepared& p,
+                         const ProbedState& s) {
+  const WaveRecord& ref = s.pulses.ref;
+  const SignalAnalysis& a = s.signals;
+  write_signal(h5, g + "/source", ref.source, s.pulses.pin, a.source, kVelocityTrace);
+  write_signal(h5, g + "/receiver", ref.force, s.pulses.pout, a.receiver, kStressTrace);
+  write_quantity(h5, g + "/receiver_mirrored/frequency", a.mirrored.f,
+                 frequency_unit(kStressTrace));
+  write_quantity(h5, g + "/receiver_mirrored/energy", a.mirrored.energy, energy_unit(kStressTrace));
+  for (size_t k = 0; k < ref.slabs.size(); ++k) {
+    const std::string slab = g + "/slab_" + std::to_string(k);
+    write_signal(h5, slab, ref.slabs[k], a.slab_picks[k], a.slab_spectra[k], kVelocityTrace);
+    h5.attribute(slab, "distance", ref.slab_x[k]);
+  }
+  if (a.ratio) {
+    write_quantity(h5, g + "/ratio/frequency", a.ratio->f, frequency_unit(kVelocityTrace));
+    write_quantity(h5, g + "/ratio/log_ratio", a.ratio->log_ratio, "1");  // ln(A2/A1)
+    h5.attribute(g + "/ratio", "slope", a.ratio->slope);
+    h5.attribute(g + "/ratio", "intercept", a.ratio->intercept);
+  }
   h5.attribute(g, "sigma_xx", p.pressure);
   h5.attribute(g, "gap", p.gap);
-  return row;
 }
 
 // What the summary says of the column as a whole.
@@ -813,47 +885,23 @@ void describe_column(Json& summary, const WaveSetup& w, const HostParticles& h) 
   }
 }
 
-}  // namespace
-
-void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
-  const WaveSetup w = read_wave_setup(scene);
-  // ParaView time series of the reference pulse at each pressure (0: none): frames at the
-  // first receiver sample at or after every k steps.
-  const long snapshot_every = scene.integer("output.snapshot_every", 0);
-  scene.require(snapshot_every >= 0, "output.snapshot_every", "must not be negative");
-  const bool with_contacts = snapshot_contacts(scene);
-  scene.require(!with_contacts || snapshot_every > 0, "output.snapshot_contacts",
-                "needs output.snapshot_every > 0 (the frames it adds the network to)");
-  scene.reject_unknown_keys();
-  check_first_system(scene, opts, [&] {
-    PeriodicBox b;
-    const HostParticles g = gas(w, b);
-    with_material_model(preparation_materials(w), [&](const auto& m) {
-      auto sys = servo_system(m, w, g, b);
-      sys.set_walls(column_walls(w, b, 0.0));  // the walls' contacts are guarded too
-    });
-  });
-  if (!begin_outputs(opts)) return;
-  const auto wall0 = std::chrono::steady_clock::now();
-  PeriodicBox box;
-  const HostParticles h = gas(w, box);
-  std::vector<double> density(h.density);
-  const MaterialSet prep_mats = preparation_materials(w);
-  std::vector<Prepared> states;
-  with_material_model(prep_mats,
-                      [&](const auto& m) { states = prepare(m, w, density, h, box, opts); });
-
-  SceneOutput output(scene, opts, "wave_transmission");
+// The study into results.h5 (a group per probed state, then the table) and summary.json (a
+// row per state, the states the servo did not reach).
+void write_study(SceneOutput& output, const WaveSetup& w, const HostParticles& h,
+                 const std::vector<Prepared>& states,
+                 const std::vector<std::optional<ProbedState>>& probed) {
   H5Writer& h5 = output.h5();
   Json& summary = output.summary();
   describe_column(summary, w, h);
-  Json table = Json::array();
+  Json table = Json::array(), unconverged = Json::array();
   StateTable columns;
-  Json unconverged = Json::array();
   for (size_t k = 0; k < states.size(); ++k) {
     const Prepared& p = states[k];
-    if (p.converged) {
-      table.push(probed_row(w, p, box, k, opts, snapshot_every, with_contacts, h5, columns));
+    if (const auto& s = probed[k]) {
+      table.push(probed_row(p, *s));
+      write_state_signals(h5, "/pressure_" + std::to_string(k), p, *s);
+      columns.add(p, s->pulses.vp_peak, s->m_wave, s->m_probe, s->q, s->q_error,
+                  s->signals.mirrored.dominant_frequency);
       continue;
     }
     // Not probed, no pulse: its row says where the servo stopped.
@@ -867,7 +915,49 @@ void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
   summary["unconverged_states"] = unconverged;
   columns.write(h5);
   h5.attribute("/", "states", static_cast<double>(states.size()));
-  summary["wall_seconds"] =
+}
+
+SnapshotChoice read_snapshot_choice(const SceneFile& scene) {
+  SnapshotChoice snap;
+  snap.every = scene.integer("output.snapshot_every", 0);
+  scene.require(snap.every >= 0, "output.snapshot_every", "must not be negative");
+  snap.contacts = snapshot_contacts(scene);
+  scene.require(!snap.contacts || snap.every > 0, "output.snapshot_contacts",
+                "needs output.snapshot_every > 0 (the frames it adds the network to)");
+  return snap;
+}
+
+// The first system the run would build (the gas in the servo's box, its walls' contacts
+// guarded too) checked before any output is touched.
+void check_column(const SceneFile& scene, const RunOptions& opts, const WaveSetup& w) {
+  check_first_system(scene, opts, [&] {
+    PeriodicBox b;
+    const HostParticles g = gas(w, b);
+    with_material_model(preparation_materials(w), [&](const auto& m) {
+      auto sys = servo_system(m, w, g, b);
+      sys.set_walls(column_walls(w, b, 0.0));
+    });
+  });
+}
+
+}  // namespace
+
+void run_wave_transmission(const SceneFile& scene, const RunOptions& opts) {
+  const WaveSetup w = read_wave_setup(scene);
+  const SnapshotChoice snap = read_snapshot_choice(scene);
+  scene.reject_unknown_keys();
+  check_column(scene, opts, w);
+  if (!begin_outputs(opts)) return;
+  const auto wall0 = std::chrono::steady_clock::now();
+  PeriodicBox box;
+  const HostParticles h = gas(w, box);
+  std::vector<Prepared> states;
+  with_material_model(preparation_materials(w),
+                      [&](const auto& m) { states = prepare(m, w, h.density, h, box, opts); });
+  const auto probed = probe_states(w, states, box, opts, snap);
+  SceneOutput output(scene, opts, "wave_transmission");
+  write_study(output, w, h, states, probed);
+  output.summary()["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   output.finish();
 }
