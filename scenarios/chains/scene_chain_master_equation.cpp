@@ -239,10 +239,16 @@ Fits fit_procedures(const EnsembleRun& fit_run, const MasterSetup& m) {
               fit_transfer_matrix_global(data, m.fw3, true)};
 }
 
-// Each procedure fitted on the first half of the realizations predicts the second half,
-// experiment by experiment, from that half's own initial state: its errors, and the rms error
-// over time in /xi_<k>/held_out.
-Json held_out_errors(const EnsembleRun& fit_run, const MasterSetup& m, size_t k, H5Writer& h5) {
+// One procedure fitted on the first half of the realizations, judged on the second half,
+// experiment by experiment, from that half's own initial state.
+struct HeldOut {
+  std::string name;
+  std::vector<double> agitated, any;  // per experiment: its agitated band's, any band's error
+  std::vector<double> rms;            // the rms error over all bands and experiments, per sample
+};
+
+// Each procedure's held-out errors.
+std::vector<HeldOut> held_out_errors(const EnsembleRun& fit_run, const MasterSetup& m) {
   const int B = m.B;
   const BandSeries fit_half{fit_run.times, fit_run.half[0]};
   const BandSeries held{fit_run.times, fit_run.half[1]};
@@ -267,29 +273,22 @@ Json held_out_errors(const EnsembleRun& fit_run, const MasterSetup& m, size_t k,
   predictors.push_back([&](const Eigen::VectorXd& e0) {
     return solve_master_equation_trapped(h4.Q, h4.trapped, e0, held.times);
   });
-  Json held_out = Json::object();
+  std::vector<HeldOut> out;
   const long n_held = static_cast<long>(held.times.size());
   for (size_t p = 0; p < names.size(); ++p) {
-    const std::string& name = names[p];
-    const Predictor& predict = predictors[p];
-    std::vector<double> agitated(B), any(B), rms(n_held, 0.0);
+    HeldOut h;
+    h.name = names[p];
+    h.agitated.assign(B, 0.0), h.any.assign(B, 0.0), h.rms.assign(n_held, 0.0);
     for (int e = 0; e < B; ++e) {
-      const Eigen::MatrixXd diff = predict(held.series[e].col(0)) - held.series[e];
-      agitated[e] = diff.row(e).cwiseAbs().maxCoeff();
-      any[e] = diff.cwiseAbs().maxCoeff();
-      for (long i = 0; i < n_held; ++i) rms[i] += diff.col(i).squaredNorm() / (double(B) * B);
+      const Eigen::MatrixXd diff = predictors[p](held.series[e].col(0)) - held.series[e];
+      h.agitated[e] = diff.row(e).cwiseAbs().maxCoeff();
+      h.any[e] = diff.cwiseAbs().maxCoeff();
+      for (long i = 0; i < n_held; ++i) h.rms[i] += diff.col(i).squaredNorm() / (double(B) * B);
     }
-    for (auto& x : rms) x = std::sqrt(x);
-    // The rms error of normalized band energies: a pure number.
-    write_quantity(h5, "/xi_" + std::to_string(k) + "/held_out/rms_error_" + name, rms, "1");
-    Json one = Json::object();
-    one["max_abs_error_agitated_band"] = agitated;
-    one["max_abs_error_any_band"] = any;
-    one["worst_agitated_band_error"] = *std::max_element(agitated.begin(), agitated.end());
-    one["rms_error_at_horizon"] = rms.back();
-    held_out[name] = one;
+    for (auto& x : h.rms) x = std::sqrt(x);
+    out.push_back(std::move(h));
   }
-  return held_out;
+  return out;
 }
 
 // The four procedures' predictions of the two-tone validation, from its first sample.
@@ -309,9 +308,86 @@ Predictions predict_validation(const Fits& f, const EnsembleRun& check) {
   return p;
 }
 
-// Group /xi_<k> of results.h5.
-void write_xi_group(H5Writer& h5, size_t k, const MasterSetup& m, const EnsembleRun& fit_run,
-                    const EnsembleRun& check, const Fits& f, const Predictions& p) {
+// The realistic use: `cost.realizations` chains to `cost.horizon`, sampled as here, by the
+// ensemble (at the speed just measured) or by the trapped-fraction master equation (timed:
+// one propagator, then one B x B product per sample).
+struct Cost {
+  double ensemble_seconds = 0, master_equation_seconds = 0;
+};
+Cost realistic_cost(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRun& check,
+                    const Fits& f) {
+  const ChainScene& cs = m.cs;
+  std::vector<double> times;
+  for (double t = 0; t <= m.use_horizon + 1e-9 * m.use_horizon; t += cs.sample_every)
+    times.push_back(t);
+  const int repeats = 5;
+  WallClock clock;
+  double sink = 0;
+  for (int r = 0; r < repeats; ++r)
+    sink += solve_master_equation_trapped(f.G4.Q, f.G4.trapped, check.bands[0].col(0), times)(0, 0);
+  Cost c;
+  c.master_equation_seconds = clock.seconds() / repeats;
+  if (!std::isfinite(sink)) throw std::runtime_error("master equation: non-finite energies");
+  const double rate = double(fit_run.bead_steps) / fit_run.seconds;
+  c.ensemble_seconds = m.use_realizations * cs.spec.beads * (m.use_horizon / cs.dt) / rate;
+  return c;
+}
+
+// Everything one disorder gives: its ensembles (the halves dropped once they have given the
+// held-out errors: nothing writes them), the fits, their held-out errors, the predictions of
+// the validation and the timed realistic use.
+struct MasterAtXi {
+  double xi = 0;
+  EnsembleRun fit_run, check;
+  Fits fits;
+  std::vector<HeldOut> held_out;
+  Predictions predictions;
+  Cost cost;
+};
+
+// The line of one disorder: the loss rates of the first and last bands and the validation's
+// errors by procedures 1 and 2, with the times of both.
+void report(const MasterSetup& m, const MasterAtXi& x) {
+  const Eigen::MatrixXd &Q1 = x.fits.Q1, &Q2 = x.fits.Q2, &sim = x.check.bands[0];
+  const Predictions& p = x.predictions;
+  const int B = m.B, b1 = m.b1, b2 = m.b2;
+  auto band_error = [&](const Eigen::MatrixXd& pred, int b) {
+    return (pred.row(b) - sim.row(b)).cwiseAbs().maxCoeff();
+  };
+  std::cout << "xi = " << x.xi << ": Q_ss(band 0) = " << Q1(0, 0) << " / " << Q2(0, 0)
+            << ", Q_ss(band " << B - 1 << ") = " << Q1(B - 1, B - 1) << " / " << Q2(B - 1, B - 1)
+            << "; prediction error bands " << b1 << "," << b2 << ": procedure 1 "
+            << band_error(p.p1, b1) << ", " << band_error(p.p1, b2) << ", procedure 2 "
+            << band_error(p.p2, b1) << ", " << band_error(p.p2, b2) << " (ensemble "
+            << x.check.seconds << " s, master equation " << p.me_seconds << " s)\n";
+}
+
+// Every disorder's ensembles, fits, held-out errors, predictions and cost (rank 0; the
+// other ranks run their share of the ensembles and get nothing), a line each as it ends.
+std::vector<MasterAtXi> run_all(MasterSetup& m, const std::vector<int>& band_tones, bool progress) {
+  std::vector<MasterAtXi> all;
+  for (size_t k = 0; k < m.cs.xis.size(); ++k) {
+    auto [fit_run, check] = run_ensembles(m, band_tones, k, progress);
+    if (!ensemble::root()) continue;
+    MasterAtXi x;
+    x.xi = m.cs.xis[k];
+    x.fits = fit_procedures(fit_run, m);
+    x.held_out = held_out_errors(fit_run, m);
+    x.predictions = predict_validation(x.fits, check);
+    for (auto* run : {&fit_run, &check}) run->half[0].clear(), run->half[1].clear();
+    x.fit_run = std::move(fit_run), x.check = std::move(check);
+    report(m, x);
+    x.cost = realistic_cost(m, x.fit_run, x.check, x.fits);
+    all.push_back(std::move(x));
+  }
+  return all;
+}
+
+// Group /xi_<k> of results.h5 (after its held-out errors).
+void write_xi_group(H5Writer& h5, size_t k, const MasterSetup& m, const MasterAtXi& x) {
+  const EnsembleRun &fit_run = x.fit_run, &check = x.check;
+  const Fits& f = x.fits;
+  const Predictions& p = x.predictions;
   const std::string g = "/xi_" + std::to_string(k);
   const auto BB = static_cast<hsize_t>(m.B);
   // Reduced units (docs/model_chains.md §1), so every unit is "1": times in t_c, the
@@ -338,22 +414,50 @@ void write_xi_group(H5Writer& h5, size_t k, const MasterSetup& m, const Ensemble
   write_quantity(h5, g + "/validation/predicted_linear", flatten(p.p2), "1", {BB, T});
   write_quantity(h5, g + "/validation/predicted_global", flatten(p.p3), "1", {BB, T});
   write_quantity(h5, g + "/validation/predicted_global_trapped", flatten(p.p4), "1", {BB, T});
-  h5.attribute(g, "xi", m.cs.spec.xi);
+  h5.attribute(g, "xi", x.xi);
   h5.attribute(g + "/validation", "band_1", m.b1);
   h5.attribute(g + "/validation", "band_2", m.b2);
 }
 
-// The run at one disorder in summary.json: the fitted loss rates, how far each procedure's
-// columns are from conserving energy, the held-out and the validation errors.
-Json run_json(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRun& check,
-              const Fits& f, const Predictions& p, Json held_out) {
-  const int B = m.B, b1 = m.b1, b2 = m.b2;
-  const Eigen::MatrixXd& sim = check.bands[0];
+// The two-tone validation's errors in summary.json: per band and over all bands, and the
+// times of the ensemble and of the master equation.
+Json validation_json(const MasterSetup& m, const MasterAtXi& x) {
+  const Eigen::MatrixXd& sim = x.check.bands[0];
+  const Predictions& p = x.predictions;
+  const int b1 = m.b1, b2 = m.b2;
   auto band_error = [&](const Eigen::MatrixXd& pred, int b) {
     return (pred.row(b) - sim.row(b)).cwiseAbs().maxCoeff();
   };
+  Json val = Json::object();
+  val["bands"] = std::vector<double>{double(b1), double(b2)};
+  val["max_abs_error_nonlinear"] = std::vector<double>{band_error(p.p1, b1), band_error(p.p1, b2)};
+  val["max_abs_error_linear"] = std::vector<double>{band_error(p.p2, b1), band_error(p.p2, b2)};
+  val["max_abs_error_global"] = std::vector<double>{band_error(p.p3, b1), band_error(p.p3, b2)};
+  val["max_abs_error_global_trapped"] =
+      std::vector<double>{band_error(p.p4, b1), band_error(p.p4, b2)};
+  // Over the fitted horizon only (the Markovian model is fitted up to the window's end).
+  const long horizon = std::min<long>(std::max(m.fw1.last, m.fw2.last), x.check.times.size() - 1);
+  val["max_abs_error_within_fit_horizon_nonlinear"] =
+      (p.p1 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+  val["max_abs_error_within_fit_horizon_linear"] =
+      (p.p2 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_nonlinear"] = (p.p1 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_linear"] = (p.p2 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_global"] = (p.p3 - sim).cwiseAbs().maxCoeff();
+  val["max_abs_error_all_bands_global_trapped"] = (p.p4 - sim).cwiseAbs().maxCoeff();
+  val["ensemble_seconds"] = x.check.seconds;
+  val["master_equation_seconds"] = p.me_seconds;
+  val["speedup"] = x.check.seconds / std::max(p.me_seconds, 1e-9);
+  return val;
+}
+
+// The run at one disorder in summary.json: the fitted loss rates, how far each procedure's
+// columns are from conserving energy, the held-out and the validation errors.
+Json run_json(const MasterSetup& m, const MasterAtXi& x, Json held_out) {
+  const int B = m.B;
+  const Fits& f = x.fits;
   Json run = Json::object();
-  run["xi"] = m.cs.spec.xi;
+  run["xi"] = x.xi;
   std::vector<double> d1, d2, cs1, cs2;
   for (int s = 0; s < B; ++s) {
     d1.push_back(f.Q1(s, s)), d2.push_back(f.Q2(s, s));
@@ -378,63 +482,61 @@ Json run_json(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRu
   run["global_fit_iterations"] =
       std::vector<double>{double(f.G3.iterations), double(f.G4.iterations)};
   run["held_out"] = std::move(held_out);
-  run["max_imaginary_part_relative"] = std::max(fit_run.max_imag, check.max_imag);
-  Json val = Json::object();
-  val["bands"] = std::vector<double>{double(b1), double(b2)};
-  val["max_abs_error_nonlinear"] = std::vector<double>{band_error(p.p1, b1), band_error(p.p1, b2)};
-  val["max_abs_error_linear"] = std::vector<double>{band_error(p.p2, b1), band_error(p.p2, b2)};
-  val["max_abs_error_global"] = std::vector<double>{band_error(p.p3, b1), band_error(p.p3, b2)};
-  val["max_abs_error_global_trapped"] =
-      std::vector<double>{band_error(p.p4, b1), band_error(p.p4, b2)};
-  // Over the fitted horizon only (the Markovian model is fitted up to the window's end).
-  const long horizon = std::min<long>(std::max(m.fw1.last, m.fw2.last), check.times.size() - 1);
-  val["max_abs_error_within_fit_horizon_nonlinear"] =
-      (p.p1 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
-  val["max_abs_error_within_fit_horizon_linear"] =
-      (p.p2 - sim).leftCols(horizon + 1).cwiseAbs().maxCoeff();
-  val["max_abs_error_all_bands_nonlinear"] = (p.p1 - sim).cwiseAbs().maxCoeff();
-  val["max_abs_error_all_bands_linear"] = (p.p2 - sim).cwiseAbs().maxCoeff();
-  val["max_abs_error_all_bands_global"] = (p.p3 - sim).cwiseAbs().maxCoeff();
-  val["max_abs_error_all_bands_global_trapped"] = (p.p4 - sim).cwiseAbs().maxCoeff();
-  val["ensemble_seconds"] = check.seconds;
-  val["master_equation_seconds"] = p.me_seconds;
-  val["speedup"] = check.seconds / std::max(p.me_seconds, 1e-9);
-  run["validation"] = val;
-  run["fit_ensemble_seconds"] = fit_run.seconds;
-  run["bead_steps_per_second"] = double(fit_run.bead_steps) / fit_run.seconds;
-  std::cout << "xi = " << m.cs.spec.xi << ": Q_ss(band 0) = " << f.Q1(0, 0) << " / " << f.Q2(0, 0)
-            << ", Q_ss(band " << B - 1 << ") = " << f.Q1(B - 1, B - 1) << " / "
-            << f.Q2(B - 1, B - 1) << "; prediction error bands " << b1 << "," << b2
-            << ": procedure 1 " << band_error(p.p1, b1) << ", " << band_error(p.p1, b2)
-            << ", procedure 2 " << band_error(p.p2, b1) << ", " << band_error(p.p2, b2)
-            << " (ensemble " << check.seconds << " s, master equation " << p.me_seconds << " s)\n";
+  run["max_imaginary_part_relative"] = std::max(x.fit_run.max_imag, x.check.max_imag);
+  run["validation"] = validation_json(m, x);
+  run["fit_ensemble_seconds"] = x.fit_run.seconds;
+  run["bead_steps_per_second"] = double(x.fit_run.bead_steps) / x.fit_run.seconds;
   return run;
 }
 
-// The realistic use: `cost.realizations` chains to `cost.horizon`, sampled as here, by the
-// ensemble (at the speed just measured) or by the trapped-fraction master equation (timed:
-// one propagator, then one B x B product per sample).
-Json cost_entry(const MasterSetup& m, const EnsembleRun& fit_run, const EnsembleRun& check,
-                const Fits& f) {
-  const ChainScene& cs = m.cs;
-  std::vector<double> times;
-  for (double t = 0; t <= m.use_horizon + 1e-9 * m.use_horizon; t += cs.sample_every)
-    times.push_back(t);
-  const int repeats = 5;
-  WallClock clock;
-  double sink = 0;
-  for (int r = 0; r < repeats; ++r)
-    sink += solve_master_equation_trapped(f.G4.Q, f.G4.trapped, check.bands[0].col(0), times)(0, 0);
-  const double me = clock.seconds() / repeats;
-  if (!std::isfinite(sink)) throw std::runtime_error("master equation: non-finite energies");
-  const double rate = double(fit_run.bead_steps) / fit_run.seconds;
-  const double ensemble = m.use_realizations * cs.spec.beads * (m.use_horizon / cs.dt) / rate;
+// The held-out errors: their rms over time in /xi_<k>/held_out, and as summary.json has them.
+Json write_held_out(H5Writer& h5, size_t k, const std::vector<HeldOut>& held) {
+  Json held_out = Json::object();
+  for (const HeldOut& h : held) {
+    // The rms error of normalized band energies: a pure number.
+    write_quantity(h5, "/xi_" + std::to_string(k) + "/held_out/rms_error_" + h.name, h.rms, "1");
+    Json one = Json::object();
+    one["max_abs_error_agitated_band"] = h.agitated;
+    one["max_abs_error_any_band"] = h.any;
+    one["worst_agitated_band_error"] = *std::max_element(h.agitated.begin(), h.agitated.end());
+    one["rms_error_at_horizon"] = h.rms.back();
+    held_out[h.name] = one;
+  }
+  return held_out;
+}
+
+Json cost_json(const MasterAtXi& x) {
   Json c = Json::object();
-  c["xi"] = cs.spec.xi;
-  c["ensemble_seconds_at_measured_speed"] = ensemble;
-  c["master_equation_seconds_measured"] = me;
-  c["ratio"] = ensemble / std::max(me, 1e-9);
+  c["xi"] = x.xi;
+  c["ensemble_seconds_at_measured_speed"] = x.cost.ensemble_seconds;
+  c["master_equation_seconds_measured"] = x.cost.master_equation_seconds;
+  c["ratio"] = x.cost.ensemble_seconds / std::max(x.cost.master_equation_seconds, 1e-9);
   return c;
+}
+
+// results.h5 (a group /xi_<k> per disorder) and summary.json.
+void write_results(SceneOutput& output, const MasterSetup& m, const std::vector<int>& band_tones,
+                   const std::vector<MasterAtXi>& xis, const WallClock& clock) {
+  Json runs = Json::array(), cost_runs = Json::array();
+  for (size_t k = 0; k < xis.size(); ++k) {
+    const MasterAtXi& x = xis[k];
+    Json held_out = write_held_out(output.h5(), k, x.held_out);
+    write_xi_group(output.h5(), k, m, x);
+    runs.push(run_json(m, x, std::move(held_out)));
+    cost_runs.push(cost_json(x));
+  }
+  output.h5().attribute("/", "bands", m.B);
+  Json& summary = output.summary();
+  summary["runs"] = runs;
+  summary["band_tones"] = std::vector<double>(band_tones.begin(), band_tones.end());
+  summary["tone_placement"] = m.placement;
+  Json cost = Json::object();
+  cost["realizations"] = m.use_realizations;
+  cost["horizon"] = m.use_horizon;
+  cost["sample_every"] = m.cs.sample_every;
+  cost["per_xi"] = cost_runs;
+  summary["cost_for_realistic_use"] = cost;
+  summary["wall_seconds"] = clock.seconds();
 }
 
 }  // namespace
@@ -448,34 +550,14 @@ void run_chain_master_equation(const SceneFile& scene, const RunOptions& opts) {
     band_tones.push_back(m.placement == "upper_edge" ? chain_band_edge_tone(s, L, B)
                                                      : chain_band_tone(s, L, B));
   if (!ensemble::root()) {  // rank 0 alone fits, predicts and writes
-    for (size_t k = 0; k < m.cs.xis.size(); ++k) run_ensembles(m, band_tones, k, opts.progress);
+    run_all(m, band_tones, opts.progress);
     return;
   }
   SceneOutput output(scene, opts, "chain_master_equation");
-  Json runs = Json::array();
-  WallClock total_clock;
-  Json cost_runs = Json::array();
-  for (size_t k = 0; k < m.cs.xis.size(); ++k) {
-    const auto [fit_run, check] = run_ensembles(m, band_tones, k, opts.progress);
-    const Fits f = fit_procedures(fit_run, m);
-    Json held_out = held_out_errors(fit_run, m, k, output.h5());
-    const Predictions p = predict_validation(f, check);
-    write_xi_group(output.h5(), k, m, fit_run, check, f, p);
-    runs.push(run_json(m, fit_run, check, f, p, std::move(held_out)));
-    cost_runs.push(cost_entry(m, fit_run, check, f));
-  }
-  output.h5().attribute("/", "bands", B);
-  Json& summary = output.summary();
-  summary["runs"] = runs;
-  summary["band_tones"] = std::vector<double>(band_tones.begin(), band_tones.end());
-  summary["tone_placement"] = m.placement;
-  Json cost = Json::object();
-  cost["realizations"] = m.use_realizations;
-  cost["horizon"] = m.use_horizon;
-  cost["sample_every"] = m.cs.sample_every;
-  cost["per_xi"] = cost_runs;
-  summary["cost_for_realistic_use"] = cost;
-  summary["wall_seconds"] = total_clock.seconds();
+  output.h5();  // the partial results.h5 made now: an unwritable folder fails before the run
+  const WallClock clock;
+  const std::vector<MasterAtXi> xis = run_all(m, band_tones, opts.progress);
+  write_results(output, m, band_tones, xis, clock);
   output.finish();
 }
 
