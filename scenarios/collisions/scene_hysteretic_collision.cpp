@@ -13,6 +13,7 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -21,24 +22,21 @@ namespace granular {
 namespace {
 
 struct HystereticSetup {
-  double k1 = 0, k2 = 0, gn = 0, density = 0, d1 = 0, d2 = 0, speed = 0;
-  std::vector<double> kc_ratios;
+  HystereticNormal::Params law;  // k1, k2 and gamma_n; kc per collision
+  std::vector<double> kc;        // adhesive stiffnesses, a collision each
+  double density = 0, d1 = 0, d2 = 0, speed = 0;
   long resolution = 2000;
 };
 
 HystereticSetup read_setup(const SceneFile& scene) {
   HystereticSetup c;
-  c.k2 = scene.real("contact.k2");
-  c.k1 = scene.real("contact.k1_over_k2") * c.k2;
-  c.kc_ratios = scene.reals("contact.kc_over_k2");
-  c.gn = scene.real("contact.gamma_n", 0.0);
+  c.law = read_hysteretic_branches(scene);
+  c.kc = scene.reals("contact.kc");
   c.density = scene.real("particles.density");
   c.d1 = scene.real("particles.diameter_1"), c.d2 = scene.real("particles.diameter_2");
   c.speed = scene.real("collision.impact_speed");
   c.resolution = scene.integer("collision.steps_per_contact", 2000);
-  scene.require(c.k2 > 0, "contact.k2", "must be positive");
-  scene.require(c.k1 > 0 && c.k1 <= c.k2, "contact.k1_over_k2", "must be in (0, 1]");
-  for (double r : c.kc_ratios) scene.require(r >= 0, "contact.kc_over_k2", "must not be negative");
+  for (double kc : c.kc) scene.require(kc >= 0, "contact.kc", "must not be negative");
   scene.require(c.speed > 0, "collision.impact_speed", "must be positive");
   scene.require(c.density > 0, "particles.density", "must be positive");
   scene.require(c.d1 > 0, "particles.diameter_1", "must be positive");
@@ -62,22 +60,23 @@ std::vector<HystereticCase> collide_all(const HystereticSetup& c) {
                m2 = c.density * M_PI / 6 * c.d2 * c.d2 * c.d2;
   const double m = m1 * m2 / (m1 + m2);
   std::vector<HystereticCase> cases;
-  for (double ratio : c.kc_ratios) {
-    ContactModel<HystereticNormal> model{
-        HystereticNormal::uniform(c.k1, c.k2, ratio * c.k2, c.gn), {}, {}};
+  const double k1 = c.law.k1, k2 = c.law.k2;
+  for (double kc : c.kc) {
+    ContactModel<HystereticNormal> model{HystereticNormal::uniform(k1, k2, kc, c.law.gn), {}, {}};
     CollisionSetup s;
     s.radius1 = 0.5 * c.d1, s.radius2 = 0.5 * c.d2, s.density = c.density, s.speed = c.speed,
     s.record = true;
-    s.dt = M_PI * std::sqrt(m / std::max(c.k2, ratio * c.k2)) / c.resolution;
+    s.dt = M_PI * std::sqrt(m / std::max(k2, kc)) / c.resolution;
     CollisionResult r = collide_head_on<Kokkos::DefaultExecutionSpace>(model, s);
     HystereticCase k;
-    k.kc_over_k2 = ratio;
+    k.kc_over_k2 = kc / k2;
     k.separated = r.duration > 0;
     k.restitution = k.separated ? r.restitution : 0.0;
     k.max_overlap = *std::max_element(r.delta.begin(), r.delta.end());
     k.t = std::move(r.t), k.overlap = std::move(r.delta), k.force = std::move(r.force);
-    std::cout << "kc/k2 = " << ratio << ": " << (k.separated ? "separated" : "stuck together")
-              << ", restitution " << k.restitution << "\n";
+    std::cout << "kc/k2 = " << k.kc_over_k2 << ": "
+              << (k.separated ? "separated" : "stuck together") << ", restitution " << k.restitution
+              << "\n";
     cases.push_back(std::move(k));
   }
   return cases;
@@ -94,7 +93,7 @@ void write_cases(SceneOutput& output, const HystereticSetup& c,
     j["kc_over_k2"] = k.kc_over_k2;
     j["separated"] = k.separated;
     j["restitution"] = k.restitution;
-    j["restitution_no_adhesion_closed_form"] = std::sqrt(c.k1 / c.k2);
+    j["restitution_no_adhesion_closed_form"] = std::sqrt(c.law.k1 / c.law.k2);
     j["max_overlap"] = k.max_overlap;
     list.push(j);
     const std::string g = "/collisions/case_" + std::to_string(n);
@@ -103,8 +102,8 @@ void write_cases(SceneOutput& output, const HystereticSetup& c,
     write_quantity(h5, g + "/normal_force", k.force, "N");
     h5.attribute(g, "kc_over_k2", k.kc_over_k2);
   }
-  h5.attribute("/", "k1", c.k1);
-  h5.attribute("/", "k2", c.k2);
+  h5.attribute("/", "k1", c.law.k1);
+  h5.attribute("/", "k2", c.law.k2);
   output.summary()["cases"] = list;
 }
 

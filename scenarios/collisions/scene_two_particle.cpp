@@ -10,6 +10,7 @@
 #include "core/io/dataset_units.hpp"
 #include "core/io/output.hpp"
 #include "scenarios/collisions/two_particle.hpp"
+#include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/scene_output.hpp"
 #include "scenarios/scene_registry.hpp"
 
@@ -25,14 +26,13 @@ struct TwoParticleSetup {
 
 TwoParticleSetup read_setup(const SceneFile& scene) {
   TwoParticleSetup c;
-  c.kn = scene.real("contact.kn"), c.gn = scene.real("contact.gamma_n");
+  const LinearNormal::Params law = read_linear_normal(scene, std::nullopt);  // gamma_n required
+  c.kn = law.kn, c.gn = law.gn;
   c.density = scene.real("particles.density");
   c.d1 = scene.real("particles.diameter");
   c.partners = scene.reals("particles.partner_diameters");
   c.speeds = scene.reals("collisions.impact_speeds");
   c.resolution = scene.integer("collisions.steps_per_contact", 1000);
-  scene.require(c.kn > 0, "contact.kn", "must be positive");
-  scene.require(c.gn >= 0, "contact.gamma_n", "must not be negative");
   scene.require(c.density > 0, "particles.density", "must be positive");
   scene.require(c.d1 > 0, "particles.diameter", "must be positive");
   for (double d : c.partners)

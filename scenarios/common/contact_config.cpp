@@ -12,6 +12,26 @@ double friction(const SceneFile& s, const std::string& key, double def) {
 }
 }  // namespace
 
+LinearNormal::Params read_linear_normal(const SceneFile& s, std::optional<double> gamma_default) {
+  LinearNormal::Params p;
+  p.kn = s.real("contact.kn");
+  p.gn = gamma_default ? s.real("contact.gamma_n", *gamma_default) : s.real("contact.gamma_n");
+  s.require(p.kn > 0, "contact.kn", "must be positive");
+  s.require(p.gn >= 0, "contact.gamma_n", "must not be negative");
+  return p;
+}
+
+HystereticNormal::Params read_hysteretic_branches(const SceneFile& s) {
+  HystereticNormal::Params p;
+  p.k2 = s.real("contact.k2");
+  p.k1 = s.real("contact.k1");
+  p.gn = s.real("contact.gamma_n", 0.0);
+  s.require(p.k2 > 0, "contact.k2", "must be positive");
+  s.require(p.k1 > 0 && p.k1 <= p.k2, "contact.k1", "must satisfy 0 < k1 <= k2");
+  s.require(p.gn >= 0, "contact.gamma_n", "must not be negative");
+  return p;
+}
+
 ContactConfig ContactConfig::read(const SceneFile& s) {
   ContactConfig c;
   c.normal = s.text("contact.normal", "linear");
@@ -26,10 +46,7 @@ ContactConfig ContactConfig::read(const SceneFile& s) {
       "needs contact.tangential = \"coulomb\" (rolling resistance acts on rotating particles)");
 
   if (c.normal == "linear") {
-    c.linear.kn = s.real("contact.kn");
-    c.linear.gn = s.real("contact.gamma_n", 0.0);
-    s.require(c.linear.kn > 0, "contact.kn", "must be positive");
-    s.require(c.linear.gn >= 0, "contact.gamma_n", "must not be negative");
+    c.linear = read_linear_normal(s);
   } else if (c.normal == "hertz") {
     const std::string form = s.text("contact.hertz_form", "stiffness");
     if (form == "stiffness") {
@@ -45,13 +62,8 @@ ContactConfig ContactConfig::read(const SceneFile& s) {
     s.require(c.hertz.K > 0, "contact.hertz_form",
               "parameters give a non-positive Hertz coefficient");
   } else {
-    c.hysteretic.k2 = s.real("contact.k2");
-    c.hysteretic.k1 = s.real("contact.k1");
+    c.hysteretic = read_hysteretic_branches(s);
     c.hysteretic.kc = s.real("contact.kc", 0.0);
-    c.hysteretic.gn = s.real("contact.gamma_n", 0.0);
-    s.require(c.hysteretic.k2 > 0, "contact.k2", "must be positive");
-    s.require(c.hysteretic.k1 > 0 && c.hysteretic.k1 <= c.hysteretic.k2, "contact.k1",
-              "must satisfy 0 < k1 <= k2");
     s.require(c.hysteretic.kc >= 0, "contact.kc", "must not be negative");
   }
 

@@ -4,6 +4,7 @@
 #pragma once
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 
@@ -26,6 +27,18 @@ struct ContactConfig {
   // Reads [contact] from a scene; every key is checked, unknown ones are reported later.
   static ContactConfig read(const SceneFile& scene);
 };
+
+// The keys of a normal law, read and checked the one way every scene reads them: the moduli
+// studies and the Python package through ContactConfig::read, the collision and compression
+// drivers directly (docs/contact_laws.md).
+// contact.kn and contact.gamma_n (N mm-1, ug us-1); gamma_n defaults to `gamma_default`, or
+// must be given where that is empty.
+LinearNormal::Params read_linear_normal(const SceneFile& s,
+                                        std::optional<double> gamma_default = 0.0);
+// contact.k2, contact.k1 (the loading and unloading stiffnesses, N mm-1) and contact.gamma_n
+// of the hysteretic law; its adhesive stiffness kc is the caller's (one value in a study, a
+// list in a collision sweep).
+HystereticNormal::Params read_hysteretic_branches(const SceneFile& s);
 
 template <class F>
 void with_contact_model(const ContactConfig& c, F&& f) {

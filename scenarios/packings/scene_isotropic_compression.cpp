@@ -18,6 +18,7 @@
 #include "core/run/progress.hpp"
 #include "kernels/contact/contact_model.hpp"
 #include "kernels/dem/dem_system.hpp"
+#include "scenarios/common/contact_config.hpp"
 #include "scenarios/common/dem_output.hpp"
 #include "scenarios/common/packing.hpp"
 #include "scenarios/common/packing_file.hpp"
@@ -164,7 +165,8 @@ IsoSetup read_setup(const SceneFile& scene) {
   s.phi_end = scene.real("compression.phi_end");
   s.rate = scene.real("compression.volumetric_strain_rate");
   s.relax_steps = scene.integer("compression.relax_steps", 0);
-  s.kn = scene.real("contact.kn"), s.gn = scene.real("contact.gamma_n");
+  const LinearNormal::Params law = read_linear_normal(scene, std::nullopt);  // gamma_n required
+  s.kn = law.kn, s.gn = law.gn;
   DemParams& params = s.params;
   params.dt = scene.real("run.dt");
   scene.require(params.dt > 0, "run.dt", "must be positive");
