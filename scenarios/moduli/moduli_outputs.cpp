@@ -79,6 +79,12 @@ void ModuliOutputs::add_config(const std::string& path) {
   config_paths.push_back(path);
 }
 
+void ModuliOutputs::add(const ConfigResults& c) {
+  if (!c.config.empty()) add_config(c.config);
+  for (const TableRow& r : c.rows) add_row(r.tag, r.values);
+  for (const SweepColumns& w : c.sweeps) add_sweep(w.meta, w.columns);
+}
+
 void ModuliOutputs::append(const ModuliOutputs& part) {
   // Rows and sweeps are rebuilt through add_* so the summary and the datasets stay in step.
   const size_t n = part.table_tags.size();

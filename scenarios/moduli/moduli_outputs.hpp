@@ -27,6 +27,8 @@ struct ModuliUnits {
 const std::string& column_unit(const ColumnUnits& units, const std::string& column,
                                const std::string& dataset);
 
+struct ConfigResults;
+
 struct ModuliOutputs {
   Json rows = Json::array();
   Json sweeps = Json::array();
@@ -48,6 +50,8 @@ struct ModuliOutputs {
   // Appends one amplitude sweep of a configuration (columns by name) under `group`.
   void add_sweep(const SweepMeta& meta, const std::map<std::string, std::vector<double>>& columns);
   void add_config(const std::string& path);
+  // What one probed configuration gave: its file (where it has one), rows and sweeps.
+  void add(const ConfigResults& c);
   // Everything of `part` appended after what is already here.
   void append(const ModuliOutputs& part);
   // The sweep columns stored under `group`, by name.
@@ -56,6 +60,27 @@ struct ModuliOutputs {
   // the sweeps (<group>/<column>) into `h5`, each with its unit from `units`. Every column's
   // unit is looked up before anything is written.
   void write_results(H5Writer& h5, const ModuliUnits& units) const;
+};
+
+// One row of a study's table: the tag of its variant and its values by column.
+struct TableRow {
+  std::string tag;
+  std::map<std::string, double> values;
+};
+
+// One sweep of a configuration (probing amplitudes, or reversibility pre-strains): where it
+// goes in results.h5 and its columns by name.
+struct SweepColumns {
+  ModuliOutputs::SweepMeta meta;
+  std::map<std::string, std::vector<double>> columns;
+};
+
+// What the probes of one configuration return: its rows (one per probing tangential
+// stiffness) and sweeps, and the file it was saved in (empty where the study saved none).
+struct ConfigResults {
+  std::string config;
+  std::vector<TableRow> rows;
+  std::vector<SweepColumns> sweeps;
 };
 
 // Scatter of K* and G* over the samples (seeds) of one preparation friction, size and target.

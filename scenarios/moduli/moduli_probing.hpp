@@ -1,7 +1,8 @@
 // Probing one configuration of the elastic_moduli study: the probing model (friction and
 // tangential stiffness of the preparation or of the scene), K, G, M with their partitions
 // and non-affine fluctuation, the theories at the same phi Z, the rate/amplitude halving
-// check and amplitude sweeps; each configuration's rows go to the study's outputs.
+// check and amplitude sweeps; each configuration's rows and sweeps are returned as data
+// (ConfigResults) for the study to add to its outputs.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -81,203 +82,157 @@ Moduli probe_config(const ConfigState& c, const Model& model, const Setup& s, do
                                  references);
 }
 
-// Everything measured on one configuration; rows appended to `out`.
+// What the probes of one configuration share: its size statistics and mean normal stiffness,
+// the scale k_n / dbar of its dimensionless moduli, its measurements, and the probing rate
+// and step count its pressure gives.
+struct ProbeBasis {
+  SizeStats st;
+  double kn = 0, scale = 0;
+  Measurements m;
+  double inertia_scale = 0, base_rate = 0, probe_I = 0;
+  long steps = 0;
+  // Below jamming the moduli vanish: probing such a state only measures the drift of a
+  // dissolving network (at the inertial-number rate of its tiny pressure, minutes per mode),
+  // so it is left out and its moduli are reported as zero.
+  bool jammed = false;
+};
+// From the state's measurements `m` (under the preparation model).
+ProbeBasis probe_basis(const Setup& s, const ConfigState& c, const Measurements& m);
+
+// The relative changes of K, G, M when the amplitude is halved at the same rate (_a) and when
+// the rate is halved at the same amplitude (_r); NaN where not checked.
+struct Halving {
+  double dK_a = kNaN, dG_a = kNaN, dM_a = kNaN, dK_r = kNaN, dG_r = kNaN, dM_r = kNaN;
+};
+
+// What one probing model measured on a configuration, with the theories at its phi and Z.
+struct ProbeResult {
+  Moduli mod;
+  double reversal = kNaN;  // isotropic reversal residual
+  double kt_kn = 0;        // tangential over normal stiffness of the probing model
+  TheoryResult th, thc;    // with the measured chi, and with the closure
+  Halving halving;
+};
+// The table row of one probing model: `context` (the preparation's columns) and what was
+// measured, the structure of the configuration included.
+std::map<std::string, double> probe_row(const Setup& s, const ConfigState& c, const ProbeBasis& b,
+                                        const ProbeResult& r,
+                                        const std::map<std::string, double>& context);
+// The console line of one probing model (`ratio`: its kt/kn, < 0 where the scene lists none).
+void report_probe(const ProbeBasis& b, const ProbeResult& r, double ratio);
+
+// Where a sweep of the configuration saved at `phi` goes: <kind>/<tag>_phi_<phi>.
+std::string sweep_group(const std::string& kind, const std::string& tag, double phi);
+// One amplitude of a sweep: the columns of `mod`, probed with `n` steps at inertial number I.
+void add_sweep_point(std::map<std::string, std::vector<double>>& sw, double amplitude,
+                     const Moduli& mod, double scale, double I, long n, double reversal);
+// One pre-strain `e` of a reversibility test (mode 0 isotropic, 1 pure shear).
+void add_reversibility_point(std::map<std::string, std::vector<double>>& rv, double e, int mode,
+                             const Reversibility& r, double scale);
+
+// The state's measurements and what its probes share.
 template <class Model>
-void analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
-             const std::map<std::string, double>& context, const std::string& tag, Outputs& out) {
-  const SizeStats st = size_stats(c);
-  const double kn = mean_normal_stiffness(c, s.contact);
-  const double scale = st.dbar / kn;
+ProbeBasis probe_basis(const Setup& s, const ConfigState& c, const Model& prep_model) {
   Measurements m;
   {
     auto sys = restart_system<DemSystem<Exec, Model>>(c, prep_model, s.params);
     m = sys.measure();
   }
-  const double P = m.pressure;
-  const double inertia_scale = P > 0 ? st.dbar * std::sqrt(st.density / P) : kNaN;
-  // Axial probing rate: from the target inertial number, else amplitude / strain_steps.
-  const double base_rate = s.probe_inertial > 0 && P > 0
-                               ? s.probe_inertial / inertia_scale
-                               : s.amplitude / (s.strain_steps * s.params.dt);
-  const long steps = s.probe_inertial > 0 ? steps_for(s, s.amplitude, base_rate) : s.strain_steps;
-  const double probe_I = s.amplitude / (steps * s.params.dt) * inertia_scale;
-  const Model probe_base = s.keep_friction ? prep_model : with_friction(prep_model, INFINITY);
-  const std::vector<double> ratios = s.kt_ratios.empty() ? std::vector<double>{-1} : s.kt_ratios;
-  // Below jamming the moduli vanish: probing such a state only measures the drift of a
-  // dissolving network (at the inertial-number rate of its tiny pressure, minutes per mode),
-  // so it is left out and its moduli are reported as zero.
-  const bool jammed = is_jammed(m);
-  for (double ratio : ratios) {
-    const Model model = ratio >= 0 ? with_tangential_stiffness(probe_base, ratio * kn) : probe_base;
-    double reversal = kNaN;
-    const Moduli mod = jammed ? probe_config(c, model, s, s.amplitude, steps, &reversal) : Moduli{};
-    std::map<std::string, double> row = context;
-    const double kt_kn = stiffness_ratio(s.contact, kn, ratio);
-    TheoryInput ti;
-    ti.phi = m.phi, ti.z = m.z_corrected, ti.chi = m.chi, ti.kt_kn = kt_kn, ti.D = st.D;
-    const TheoryResult th = moduli_theory(ti);
-    ti.chi = -1;
-    const TheoryResult thc = moduli_theory(ti);
-    double dK_a = kNaN, dG_a = kNaN, dM_a = kNaN, dK_r = kNaN, dG_r = kNaN, dM_r = kNaN;
-    // Below jamming the relative change of the moduli under halving means nothing.
-    // Halving: half the amplitude at the same rate; the same amplitude at half the rate.
-    if (s.halving && jammed) {
-      const Moduli ha =
-          probe_config(c, model, s, s.amplitude / 2, std::max(1L, steps / 2), nullptr);
-      const Moduli hr = probe_config(c, model, s, s.amplitude, 2 * steps, nullptr);
-      dK_a = rel_change(ha.K, mod.K), dG_a = rel_change(ha.G, mod.G),
-      dM_a = rel_change(ha.M, mod.M);
-      dK_r = rel_change(hr.K, mod.K), dG_r = rel_change(hr.G, mod.G),
-      dM_r = rel_change(hr.M, mod.M);
+  return probe_basis(s, c, m);
+}
+
+// The halving check: half the amplitude at the same rate; the same amplitude at half the rate.
+template <class Model>
+Halving halving_check(const Setup& s, const ConfigState& c, const Model& model, long steps,
+                      const Moduli& mod) {
+  const Moduli ha = probe_config(c, model, s, s.amplitude / 2, std::max(1L, steps / 2), nullptr);
+  const Moduli hr = probe_config(c, model, s, s.amplitude, 2 * steps, nullptr);
+  Halving h;
+  h.dK_a = rel_change(ha.K, mod.K), h.dG_a = rel_change(ha.G, mod.G),
+  h.dM_a = rel_change(ha.M, mod.M);
+  h.dK_r = rel_change(hr.K, mod.K), h.dG_r = rel_change(hr.G, mod.G),
+  h.dM_r = rel_change(hr.M, mod.M);
+  return h;
+}
+
+// Probes the configuration with `model` (a jammed one only) and evaluates the theories.
+template <class Model>
+ProbeResult probe_with(const Setup& s, const ConfigState& c, const ProbeBasis& b,
+                       const Model& model, double ratio) {
+  ProbeResult r;
+  if (b.jammed) r.mod = probe_config(c, model, s, s.amplitude, b.steps, &r.reversal);
+  r.kt_kn = stiffness_ratio(s.contact, b.kn, ratio);
+  TheoryInput ti;
+  ti.phi = b.m.phi, ti.z = b.m.z_corrected, ti.chi = b.m.chi, ti.kt_kn = r.kt_kn, ti.D = b.st.D;
+  r.th = moduli_theory(ti);
+  ti.chi = -1;
+  r.thc = moduli_theory(ti);
+  // Below jamming the relative change of the moduli under halving means nothing.
+  if (s.halving && b.jammed) r.halving = halving_check(s, c, model, b.steps, r.mod);
+  return r;
+}
+
+// Reversibility: pre-strains of growing size, isotropic and pure shear, each from the saved
+// state relaxed further, then reversed (see probe_reversibility).
+template <class Model>
+SweepColumns reversibility_sweep(const Setup& s, const ConfigState& c, const Model& probe_base,
+                                 const ProbeBasis& b, const std::string& tag) {
+  std::map<std::string, std::vector<double>> rv;
+  for (int mode = 0; mode < 2; ++mode)
+    for (double e : s.prestrains) {
+      auto sys = restart_system<DemSystem<Exec, Model>>(c, probe_base, s.params);
+      const Reversibility r = probe_reversibility(
+          sys, mode == 0 ? kIsotropic : kPureShear, e, s.amplitude, steps_for(s, e, b.base_rate),
+          b.steps, s.probe_relax, s.prestrain_relax_ratio, s.relax_max);
+      add_reversibility_point(rv, e, mode, r, b.scale);
+      std::cerr << "  pre-strain " << e << (mode == 0 ? " isotropic" : " shear") << ": loading "
+                << r.loading * b.scale << "  unloading " << r.unloading * b.scale << "  residual "
+                << r.residual << "\n";
     }
-    const std::map<std::string, double> values = {
-        {"particles", static_cast<double>(c.size())},
-        {"jammed", jammed ? 1.0 : 0.0},
-        {"phi", m.phi},
-        {"z_corrected", m.z_corrected},
-        {"chi", m.chi},
-        {"rattler_fraction", m.rattlers / c.size()},
-        {"pressure_star", m.pressure * scale},
-        {"kn_mean", kn},
-        {"kt_kn", kt_kn},
-        {"inertial_number_probe", probe_I},
-        {"probe_strain_steps", static_cast<double>(steps)},
-        {"K_star", mod.K * scale},
-        {"G_star", mod.G * scale},
-        {"M_star", mod.M * scale},
-        {"K_n_star", mod.K_n * scale},
-        {"K_t_star", mod.K_t * scale},
-        {"G_n_star", mod.G_n * scale},
-        {"G_t_star", mod.G_t * scale},
-        {"M_over_K_plus_4G_3", mod.M / (mod.K + 4 * mod.G / 3)},
-        {"isotropic_reversal_residual", reversal},
-        {"eta_K", mod.eta_K},
-        {"eta_G", mod.eta_G},
-        {"eta_M", mod.eta_M},
-        {"eta_K_per_contact", mod.eta_K_per_contact},
-        {"eta_K_normal", mod.eta_K_normal},
-        {"normal_relaxation_K", mod.normal_relaxation_K},
-        {"halving_amplitude_rel_change_K", dK_a},
-        {"halving_amplitude_rel_change_G", dG_a},
-        {"halving_amplitude_rel_change_M", dM_a},
-        {"halving_rate_rel_change_K", dK_r},
-        {"halving_rate_rel_change_G", dG_r},
-        {"halving_rate_rel_change_M", dM_r},
-        {"K_emt", th.K_emt},
-        {"G_emt", th.G_emt},
-        {"K_ft1", th.K_ft1},
-        {"G_ft1", th.G_ft1},
-        {"K_ft2", th.K_ft2},
-        {"G_ft2", th.G_ft2},
-        {"K_ft2_closure", thc.K_ft2},
-        {"G_ft2_closure", thc.G_ft2},
-        {"rho", th.rho},
-        {"rho_s", th.rho_s},
-        {"zeta", th.zeta}};
-    row.insert(values.begin(), values.end());
-    // Structure of the configuration: contact-number histogram, fabric tensor, and the
-    // pressure carried by normal and by tangential contact forces.
-    const char* comp[6] = {"xx", "yy", "zz", "xy", "xz", "yz"};
-    for (int q = 0; q < 7; ++q)
-      row["contact_fraction_" + std::to_string(q) + (q == 6 ? "_or_more" : "")] =
-          m.contact_histogram[q];
-    for (int q = 0; q < 6; ++q) row[std::string("fabric_") + comp[q]] = m.fabric[q];
-    // The source's normalisation of the cohesive set, P / k* with k* = k1 / (2<a>) (the
-    // engine's P* divides by k2 / dbar, the un/reloading stiffness).
-    if (s.contact.normal == "hysteretic")
-      row["pressure_over_k1_star"] = m.pressure * st.dbar / s.contact.hysteretic.k1;
-    row["pressure_normal_star"] =
-        (m.stress_normal[0] + m.stress_normal[1] + m.stress_normal[2]) / 3 * scale;
-    row["pressure_tangential_star"] =
-        (m.stress_tangential[0] + m.stress_tangential[1] + m.stress_tangential[2]) / 3 * scale;
-    out.add_row(tag, row);
-    std::cerr << "phi " << m.phi << (ratio >= 0 ? "  kt/kn " + std::to_string(ratio) : "") << ": Z "
-              << m.z_corrected;
-    if (jammed)
-      std::cerr << "  K* " << mod.K * scale << "  G* " << mod.G * scale << "  M/(K+4G/3) "
-                << mod.M / (mod.K + 4 * mod.G / 3) << "  eta_K " << mod.eta_K << "  I " << probe_I
-                << "\n";
-    else
-      std::cerr << "  rattlers " << m.rattlers << " of " << m.particles
-                << "  (unjammed: no load-bearing contact network, not probed)\n";
-  }
-  if (!s.prestrains.empty() && jammed) {
-    // Reversibility: pre-strains of growing size, isotropic and pure shear, each from the
-    // saved state relaxed further, then reversed (see probe_reversibility).
-    std::map<std::string, std::vector<double>> rv;
-    for (int mode = 0; mode < 2; ++mode)
-      for (double e : s.prestrains) {
-        auto sys = restart_system<DemSystem<Exec, Model>>(c, probe_base, s.params);
-        const Reversibility r = probe_reversibility(
-            sys, mode == 0 ? kIsotropic : kPureShear, e, s.amplitude, steps_for(s, e, base_rate),
-            steps, s.probe_relax, s.prestrain_relax_ratio, s.relax_max);
-        const double vals[] = {e,
-                               static_cast<double>(mode),
-                               r.loading * scale,
-                               r.unloading * scale,
-                               r.residual,
-                               r.relaxed_ratio};
-        const char* names[] = {"prestrain",
-                               "mode",
-                               "loading_modulus_star",
-                               "unloading_modulus_star",
-                               "residual",
-                               "relaxed_ekin_over_epot"};
-        for (size_t q = 0; q < std::size(vals); ++q) rv[names[q]].push_back(vals[q]);
-        std::cerr << "  pre-strain " << e << (mode == 0 ? " isotropic" : " shear") << ": loading "
-                  << r.loading * scale << "  unloading " << r.unloading * scale << "  residual "
-                  << r.residual << "\n";
-      }
-    char name[64];
-    std::snprintf(name, sizeof name, "phi_%.4f", c.phi);
-    out.add_sweep(
-        {"/reversibility/" + (tag.empty() ? "" : tag + "_") + name, tag, m.phi, m.z_corrected}, rv);
-  }
-  if (s.amplitudes.empty() || !jammed) return;
-  // Amplitude sweep at the base probing rate (bounded step counts), from the same state.
-  // The amplitudes whose step count reaches the cap share one reference run.
+  return {{sweep_group("/reversibility/", tag, c.phi), tag, b.m.phi, b.m.z_corrected}, rv};
+}
+
+// Amplitude sweep at the base probing rate (bounded step counts), from the same state.
+// The amplitudes whose step count reaches the cap share one reference run.
+template <class Model>
+SweepColumns amplitude_sweep(const Setup& s, const ConfigState& c, const Model& probe_base,
+                             const ProbeBasis& b, const std::string& tag) {
   std::map<std::string, std::vector<double>> sw;
   ReferenceRuns<DemSystem<Exec, Model>> references;
   for (double a : s.amplitudes) {
     // At the base rate (smaller amplitudes take fewer steps), or in the base probe's number of
     // steps (the rate scales with the amplitude: 100 times smaller amplitude and rate).
-    const long n = s.sweep_same_steps ? steps : steps_for(s, a, base_rate);
+    const long n = s.sweep_same_steps ? b.steps : steps_for(s, a, b.base_rate);
     double reversal = 0;
     const Moduli mod = probe_config(c, probe_base, s, a, n, &reversal, &references);
-    const double vals[] = {a,
-                           mod.K * scale,
-                           mod.G * scale,
-                           mod.M * scale,
-                           mod.eta_K,
-                           mod.eta_G,
-                           mod.eta_M,
-                           a / (n * s.params.dt) * inertia_scale,
-                           static_cast<double>(n),
-                           reversal,
-                           mod.fabric_v_change_K,
-                           mod.fabric_v_change_G,
-                           mod.fabric_dev_change_G};
-    const char* names[] = {"amplitude",
-                           "K_star",
-                           "G_star",
-                           "M_star",
-                           "eta_K",
-                           "eta_G",
-                           "eta_M",
-                           "inertial_number",
-                           "strain_steps",
-                           "reversal_residual",
-                           "fabric_v_change_K",
-                           "fabric_v_change_G",
-                           "fabric_dev_change_G"};
-    for (size_t q = 0; q < std::size(vals); ++q) sw[names[q]].push_back(vals[q]);
-    std::cerr << "  sweep amplitude " << a << ": K* " << mod.K * scale << "  G* " << mod.G * scale
-              << "  M* " << mod.M * scale << "\n";
+    add_sweep_point(sw, a, mod, b.scale, a / (n * s.params.dt) * b.inertia_scale, n, reversal);
+    std::cerr << "  sweep amplitude " << a << ": K* " << mod.K * b.scale << "  G* "
+              << mod.G * b.scale << "  M* " << mod.M * b.scale << "\n";
   }
-  char name[64];
-  std::snprintf(name, sizeof name, "phi_%.4f", c.phi);
-  const std::string group = "/sweep/" + (tag.empty() ? "" : tag + "_") + name;
-  out.add_sweep({group, tag, m.phi, m.z_corrected}, sw);
+  return {{sweep_group("/sweep/", tag, c.phi), tag, b.m.phi, b.m.z_corrected}, sw};
+}
+
+// Everything measured on one configuration: a row per probing tangential stiffness, and the
+// reversibility test and amplitude sweep where the scene asks for them (jammed states only).
+template <class Model>
+ConfigResults analyse(const Setup& s, const ConfigState& c, const Model& prep_model,
+                      const std::map<std::string, double>& context, const std::string& tag) {
+  const ProbeBasis b = probe_basis(s, c, prep_model);
+  const Model probe_base = s.keep_friction ? prep_model : with_friction(prep_model, INFINITY);
+  const std::vector<double> ratios = s.kt_ratios.empty() ? std::vector<double>{-1} : s.kt_ratios;
+  ConfigResults out;
+  for (double ratio : ratios) {
+    const Model model =
+        ratio >= 0 ? with_tangential_stiffness(probe_base, ratio * b.kn) : probe_base;
+    const ProbeResult r = probe_with(s, c, b, model, ratio);
+    out.rows.push_back({tag, probe_row(s, c, b, r, context)});
+    report_probe(b, r, ratio);
+  }
+  if (!s.prestrains.empty() && b.jammed)
+    out.sweeps.push_back(reversibility_sweep(s, c, probe_base, b, tag));
+  if (!s.amplitudes.empty() && b.jammed)
+    out.sweeps.push_back(amplitude_sweep(s, c, probe_base, b, tag));
+  return out;
 }
 
 }  // namespace granular::moduli_study

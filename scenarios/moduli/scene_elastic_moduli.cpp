@@ -164,21 +164,24 @@ void check_variants(const SceneFile& scene, const RunOptions& opts, const Setup&
 }
 
 // Probes the packing or saved configuration of [start] from: one configuration, which rank 0
-// probes.
+// probes (the other ranks return no outputs).
 template <class Model>
-void probe_start(const Setup& s, const Model& model, Outputs& out) {
+Outputs probe_start(const Setup& s, const Model& model) {
   const ConfigState c = s.start_packing ? *s.start_packing : read_config(s.start_from);
   std::cerr << "probing the " << (s.start_packing ? "packing " : "saved configuration ")
             << s.start_from << " (phi " << c.phi << ")\n";
-  if (!ensemble::root()) return;
-  analyse(s, c, model,
-          {{"mu_preparation", kNaN},
-           {"seed", kNaN},
-           {"ekin_over_epot", kNaN},
-           {"inertial_number_preparation", kNaN},
-           {"phi_target", kNaN}},
-          "", out);
-  out.add_config(s.start_from);
+  Outputs out;
+  if (!ensemble::root()) return out;
+  ConfigResults r = analyse(s, c, model,
+                            {{"mu_preparation", kNaN},
+                             {"seed", kNaN},
+                             {"ekin_over_epot", kNaN},
+                             {"inertial_number_preparation", kNaN},
+                             {"phi_target", kNaN}},
+                            "");
+  r.config = s.start_from;
+  out.add(r);
+  return out;
 }
 
 // The checkpoint parts of a study: their folder, the fingerprint of the parameters they were
@@ -189,109 +192,236 @@ struct StudyParts {
   StudyDeal deal;
 };
 
-// Prepares and probes this rank's variants, each saved as a checkpoint part; those a resumed
-// run finds done are taken from their parts. False when the run stopped part-way (a stage
-// budget, --stop-after-minutes): the checkpoints are its output so far.
+// The study's checkpoint folder, opened (a fresh run refuses one of an unfinished study), its
+// parts named, and the variants dealt over the ranks.
+StudyParts open_study(const SceneFile& scene, const RunOptions& opts, const Setup& s) {
+  // Finished preparation variants are checkpointed here; a fresh run starts without them.
+  StudyParts study;
+  study.parts = open_study_checkpoints(opts.out_dir, opts.resume);
+  study.fingerprint = moduli_parameters_fingerprint(scene.used());
+  for (const PrepVariant& v : s.variants)
+    study.names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
+                          (v.tag.empty() ? "" : "_" + v.tag));
+  if (s.start_from.empty())
+    study.deal = deal_study_units(study.parts, study.names, study.fingerprint, opts.resume);
+  return study;
+}
+
+// When a run stops at a checkpoint: after run.stop_after_variants variants or
+// run.stop_after_stages stages, or once --stop-after-minutes have passed.
+class StopRules {
+ public:
+  StopRules(const Setup& s, const RunOptions& opts)
+      : s_(s), opts_(opts), start_(std::chrono::steady_clock::now()) {}
+  bool out_of_time() const {
+    const double minutes =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count() / 60;
+    return opts_.stop_after_minutes > 0 && minutes >= opts_.stop_after_minutes;
+  }
+  // Before the next variant, `prepared` having been prepared by this run.
+  bool before_variant(long prepared) const {
+    return (s_.stop_after_variants > 0 && prepared == s_.stop_after_variants) ||
+           (prepared > 0 && out_of_time());
+  }
+  // After a checkpointed stage.
+  bool after_stage() {
+    ++stages_run_;
+    return (s_.stop_after_stages > 0 && stages_run_ >= s_.stop_after_stages) || out_of_time();
+  }
+
+ private:
+  const Setup& s_;
+  const RunOptions& opts_;
+  std::chrono::steady_clock::time_point start_;
+  long stages_run_ = 0;
+};
+
+// The target a configuration was saved at (the closest listed value).
+double saved_target(const std::vector<double>& targets, double phi) {
+  double target = targets[0];
+  for (double t : targets)
+    if (std::fabs(t - phi) < std::fabs(target - phi)) target = t;
+  return target;
+}
+
+// The columns of a variant's rows that describe its preparation (the configuration's
+// E_kin/E_pot, inertial number and target are added as each is saved).
+std::map<std::string, double> preparation_context(const Setup& s, const PrepVariant& v) {
+  const double kc =
+      std::isnan(v.kc) ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0) : v.kc;
+  const double mu =
+      std::isnan(v.mu) ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0) : v.mu;
+  return {{"mu_preparation", mu}, {"kc_preparation", kc}, {"seed", static_cast<double>(v.seed)}};
+}
+
+// Prepares and probes one variant: each relaxed configuration is written to configs/ and
+// probed as the preparation saves it. Checkpointed in the study's parts as it goes.
 template <class Model>
-bool run_variants(const Setup& s, const Model& model, const RunOptions& opts,
-                  const StudyParts& study, Outputs& out, std::vector<std::string>& ran,
-                  std::vector<std::string>& configs_written) {
-  const std::string& parts = study.parts;
-  const std::string& fingerprint = study.fingerprint;
-  const std::vector<std::string>& names = study.names;
-  const StudyDeal& deal = study.deal;
+Prepared run_variant(const Setup& s, const Model& model, const RunOptions& opts,
+                     const StudyParts& study, size_t unit, Progress& progress, long& done,
+                     const std::function<bool()>& stop) {
+  const PrepVariant& v = s.variants[unit];
+  const Model prep = preparation_model(model, v);
+  const std::map<std::string, double> context = preparation_context(s, v);
+  const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
+  make_directories(dir);
+  const StageCheckpoints ck{study.parts, study.names[unit], study.fingerprint, opts.resume};
+  const Setup sv = for_variant(s, v);
+  return prepare(sv, unit, prep, progress, done, ck, stop,
+                 [&](const ConfigState& c, double ratio, double I) {
+                   const double target = saved_target(s.targets, c.phi);
+                   char name[64];
+                   std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
+                   write_config(dir + name, c);
+                   std::map<std::string, double> row = context;
+                   row["ekin_over_epot"] = ratio, row["inertial_number_preparation"] = I;
+                   row["phi_target"] = target;
+                   ConfigResults r = analyse(sv, c, prep, row, v.tag);
+                   r.config = dir + name;
+                   return r;
+                 });
+}
+
+// What a study's variants returned: each one's outputs in variant order (those a resumed run
+// took from their checkpoints included; over several ranks none, rank 0 reads every part
+// back), the parts this rank ran and the configurations it wrote, and whether it stopped
+// part-way (a stage or variant budget, --stop-after-minutes: the checkpoints are its output
+// so far).
+struct VariantsRun {
+  std::vector<Outputs> parts;
+  std::vector<std::string> ran, configs_written;
+  bool stopped = false;
+};
+
+// Prepares and probes this rank's variants, each saved as a checkpoint part; those a resumed
+// run finds done are taken from their parts.
+template <class Model>
+VariantsRun run_variants(const Setup& s, const Model& model, const RunOptions& opts,
+                         const StudyParts& study) {
   const bool spread = ensemble::size() > 1;
   // Steps: the gas compression, the relaxation, the compression to phi_max (unloading
   // branch only) and one per saved configuration.
   const size_t steps = (s.loading_branch ? 2 : 3) + s.targets.size();
   size_t units_here = 0;  // this rank's variants and those taken from checkpoints
-  for (size_t k = 0; k < s.variants.size(); ++k) units_here += deal.done[k] || deal.mine(k);
+  for (size_t k = 0; k < s.variants.size(); ++k)
+    units_here += study.deal.done[k] || study.deal.mine(k);
   Progress progress("preparation", static_cast<long>(units_here * steps), opts.progress);
-  long done = 0, prepared = 0, stages_run = 0;
-  const auto start = std::chrono::steady_clock::now();
-  auto out_of_time = [&] {
-    const double minutes =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60;
-    return opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes;
-  };
-  const std::function<bool()> stop = [&] {
-    ++stages_run;
-    return (s.stop_after_stages > 0 && stages_run >= s.stop_after_stages) || out_of_time();
-  };
-  for (const PrepVariant& v : s.variants) {
-    const size_t unit = static_cast<size_t>(&v - s.variants.data());
-    const std::string& part_name = names[unit];
-    Outputs part;
-    if (deal.done[unit]) {
-      std::cerr << ensemble::prefix() << "variant " << (v.tag.empty() ? part_name : v.tag)
-                << ": taken from the checkpoint in " << parts << "\n";
-      if (!spread && load_moduli_part(parts, part_name, fingerprint, part)) out.append(part);
+  long done = 0, prepared = 0;
+  StopRules rules(s, opts);
+  const std::function<bool()> stop = [&] { return rules.after_stage(); };
+  VariantsRun run;
+  for (size_t unit = 0; unit < s.variants.size(); ++unit) {
+    const std::string& part_name = study.names[unit];
+    if (study.deal.done[unit]) {
+      const std::string& tag = s.variants[unit].tag;
+      std::cerr << ensemble::prefix() << "variant " << (tag.empty() ? part_name : tag)
+                << ": taken from the checkpoint in " << study.parts << "\n";
+      Outputs part;
+      if (!spread && load_moduli_part(study.parts, part_name, study.fingerprint, part))
+        run.parts.push_back(std::move(part));
       progress.update(done += static_cast<long>(steps));
       continue;
     }
-    if (!deal.mine(unit)) continue;
-    if ((s.stop_after_variants > 0 && prepared == s.stop_after_variants) ||
-        (prepared > 0 && out_of_time())) {
+    if (!study.deal.mine(unit)) continue;
+    if (rules.before_variant(prepared)) {
       std::cerr << "stopped after " << prepared
                 << " variants (run.stop_after_variants / --stop-after-minutes); continue with "
                    "--resume\n";
-      return false;
+      run.stopped = true;
+      return run;
     }
     ++prepared;
-    const Model prep = preparation_model(model, v);
-    const double kc = std::isnan(v.kc)
-                          ? (s.contact.normal == "hysteretic" ? s.contact.hysteretic.kc : 0.0)
-                          : v.kc;
-    const double mu = std::isnan(v.mu)
-                          ? (s.contact.tangential == "coulomb" ? s.contact.coulomb.mu_s : 0.0)
-                          : v.mu;
-    const std::string dir = opts.out_dir + "/configs" + (v.tag.empty() ? "" : "/" + v.tag);
-    make_directories(dir);
-    std::vector<double> targets = s.targets;
-    const StageCheckpoints ck{parts, part_name, fingerprint, opts.resume};
-    const Setup sv = for_variant(s, v);
-    const bool finished = prepare(sv, unit, prep, part, progress, done, ck, stop,
-                                  [&](const ConfigState& c, double ratio, double I) {
-                                    // The target this configuration was saved at (the closest
-                                    // listed value).
-                                    double target = targets[0];
-                                    for (double t : targets)
-                                      if (std::fabs(t - c.phi) < std::fabs(target - c.phi))
-                                        target = t;
-                                    char name[64];
-                                    std::snprintf(name, sizeof name, "/phi_%.4f.h5", target);
-                                    write_config(dir + name, c);
-                                    part.add_config(dir + name);
-                                    analyse(sv, c, prep,
-                                            {{"mu_preparation", mu},
-                                             {"kc_preparation", kc},
-                                             {"seed", static_cast<double>(v.seed)},
-                                             {"ekin_over_epot", ratio},
-                                             {"inertial_number_preparation", I},
-                                             {"phi_target", target}},
-                                            v.tag, part);
-                                  });
-    ran.push_back(part_name);
-    configs_written.insert(configs_written.end(), part.config_paths.begin(),
-                           part.config_paths.end());
-    if (!finished) {
+    Prepared p = run_variant(s, model, opts, study, unit, progress, done, stop);
+    run.ran.push_back(part_name);
+    run.configs_written.insert(run.configs_written.end(), p.out.config_paths.begin(),
+                               p.out.config_paths.end());
+    if (!p.finished) {
       std::cerr << "stopped at a checkpoint (run.stop_after_stages / --stop-after-minutes); "
                    "continue with --resume\n";
-      return false;
+      run.stopped = true;
+      return run;
     }
-    if (!spread) out.append(part);  // prepare() saved it as the variant's checkpoint
+    if (!spread) run.parts.push_back(std::move(p.out));  // prepare() saved it as a checkpoint
   }
-  return true;
+  return run;
+}
+
+// The largest relative change of K, G, M over the jammed configurations when the probing
+// amplitude or rate is halved, and how many unjammed ones were left out.
+struct HalvingCheck {
+  double worst_amplitude = 0, worst_rate = 0, unjammed = 0;
+};
+
+// The study's results: every variant's outputs in variant order, and what summary.json
+// derives from them.
+struct StudyResults {
+  Outputs out;
+  std::vector<JammingPoint> jamming;  // per variant, on the unloading branch
+  std::optional<HalvingCheck> halving;
+  std::vector<SizeScatter> scatter;
+};
+
+// Largest relative change of K, G, M over all configurations when the probing amplitude or
+// rate is halved: the elastic-plateau criterion is < 1 %. Configurations below jamming have
+// no elastic plateau.
+HalvingCheck worst_halving(const Outputs& out) {
+  HalvingCheck h;
+  const auto& jammed = out.table.at("jammed");
+  for (const char* m : {"K", "G", "M"}) {
+    const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
+    const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
+    for (size_t i = 0; i < jammed.size(); ++i)
+      if (jammed[i] > 0)  // a NaN change is kept: it fails the check and stops the summary
+        h.worst_amplitude = max_keep_nan(h.worst_amplitude, a[i]),
+        h.worst_rate = max_keep_nan(h.worst_rate, r[i]);
+  }
+  h.unjammed = static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
+  return h;
+}
+
+// The study's outputs and what follows from them: the jamming density per preparation
+// variant from its unloading series, the halving check and the scatter over seeds.
+StudyResults study_results(const Setup& s, Outputs out) {
+  StudyResults r;
+  r.out = std::move(out);
+  if (!s.loading_branch) {
+    const bool hertz = s.contact.normal == "hertz";
+    r.jamming = jamming_points(r.out.prep, hertz ? "pressure" : "pressure_star", hertz ? 1.5 : 1.0,
+                               s.jamming_p_max > 0 ? s.jamming_p_max : -1);
+  }
+  if (s.halving) r.halving = worst_halving(r.out);
+  r.scatter = size_scatter(r.out.table);
+  return r;
+}
+
+// Runs the study: the [start] configuration, or this rank's variants. On rank 0 its results
+// in variant order; nothing on the other ranks, or where the study stopped at a checkpoint
+// (the checkpoints in variants/ are the output so far).
+std::optional<StudyResults> run_study(const Setup& s, const RunOptions& opts,
+                                      const StudyParts& study) {
+  Outputs out;
+  VariantsRun run;
+  with_contact_model(s.contact, [&](const auto& model) {
+    if (!s.start_from.empty())
+      out = probe_start(s, model);
+    else
+      run = run_variants(s, model, opts, study);
+  });
+  // Over several ranks each runs its share of the variants and rank 0 reads every part back
+  // in variant order; one rank runs them all, in order, as parts of a single process.
+  if (ensemble::size() > 1 && s.start_from.empty())
+    run.stopped = gather_study_units(study.parts, study.names, run.ran, run.configs_written,
+                                     study.fingerprint, run.stopped, out);
+  else
+    for (const Outputs& part : run.parts) out.append(part);
+  if (!ensemble::root() || run.stopped) return std::nullopt;
+  return study_results(s, std::move(out));
 }
 
 // Jamming density per preparation variant from its unloading series.
-Json jamming_json(const Setup& s, const Outputs& out) {
-  // Jamming density per preparation variant from its unloading series.
-  const bool hertz = s.contact.normal == "hertz";
+Json jamming_json(const Setup& s, const std::vector<JammingPoint>& points) {
   Json jam = Json::array();
-  for (const JammingPoint& j :
-       jamming_points(out.prep, hertz ? "pressure" : "pressure_star", hertz ? 1.5 : 1.0,
-                      s.jamming_p_max > 0 ? s.jamming_p_max : -1)) {
+  for (const JammingPoint& j : points) {
     Json e = Json::object();
     const PrepVariant& v = s.variants.at(j.variant);
     e["variant"] = j.variant;
@@ -311,25 +441,13 @@ Json jamming_json(const Setup& s, const Outputs& out) {
   return jam;
 }
 
-// Largest relative change of K, G, M over all configurations when the probing amplitude or
-// rate is halved: the elastic-plateau criterion is < 1 %. Configurations below jamming have
-// no elastic plateau.
-Json halving_json(const Outputs& out) {
-  double worst_a = 0, worst_r = 0;
-  const auto& jammed = out.table.at("jammed");
-  for (const char* m : {"K", "G", "M"}) {
-    const auto& a = out.table.at(std::string("halving_amplitude_rel_change_") + m);
-    const auto& r = out.table.at(std::string("halving_rate_rel_change_") + m);
-    for (size_t i = 0; i < jammed.size(); ++i)
-      if (jammed[i] > 0)  // a NaN change is kept: it fails the check and stops the summary
-        worst_a = max_keep_nan(worst_a, a[i]), worst_r = max_keep_nan(worst_r, r[i]);
-  }
+// The halving check of summary.json.
+Json halving_json(const HalvingCheck& h) {
   Json hc = Json::object();
-  hc["max_rel_change_half_amplitude"] = worst_a;
-  hc["max_rel_change_half_rate"] = worst_r;
-  hc["within_1_percent"] = worst_a < 0.01 && worst_r < 0.01;
-  hc["unjammed_configurations_left_out"] =
-      static_cast<double>(std::count(jammed.begin(), jammed.end(), 0.0));
+  hc["max_rel_change_half_amplitude"] = h.worst_amplitude;
+  hc["max_rel_change_half_rate"] = h.worst_rate;
+  hc["within_1_percent"] = h.worst_amplitude < 0.01 && h.worst_rate < 0.01;
+  hc["unjammed_configurations_left_out"] = h.unjammed;
   return hc;
 }
 
@@ -352,7 +470,8 @@ Json size_scatter_json(const std::vector<SizeScatter>& scatter) {
 }
 
 // What the study adds to summary.json after its results.
-void write_study_summary(const Setup& s, const Outputs& out, Json& summary) {
+void write_study_summary(const Setup& s, const StudyResults& r, Json& summary) {
+  const Outputs& out = r.out;
   summary["configurations"] = out.configs;
   // The configurations are large restartable files the run regenerates; a summary kept as a
   // reference output travels without them, and says so.
@@ -369,7 +488,7 @@ void write_study_summary(const Setup& s, const Outputs& out, Json& summary) {
         "(probe strain and relaxation, the relaxation cap) was rescaled to span the same "
         "physical time as with run.dt, so the rates and durations are the same for all";
   if (!s.loading_branch) {
-    summary["jamming"] = jamming_json(s, out);
+    summary["jamming"] = jamming_json(s, r.jamming);
     summary["jamming_note"] =
         "phi_J: root of the straight line P^(1/alpha) against phi (alpha = 1 linear, 3/2 Hertz) "
         "fitted to the unloading samples with 0 < P <= preparation.jamming_fit_pressure_max; "
@@ -380,9 +499,16 @@ void write_study_summary(const Setup& s, const Outputs& out, Json& summary) {
   // Amplitude sweeps and reversibility tests, one entry per configuration (the columns say
   // which: "amplitude" or "prestrain").
   if (!s.amplitudes.empty() || !s.prestrains.empty()) summary["amplitude_sweeps"] = out.sweeps;
-  if (s.halving) summary["halving_check"] = halving_json(out);
-  const std::vector<SizeScatter> scatter = size_scatter(out.table);
-  if (!scatter.empty()) summary["size_scatter"] = size_scatter_json(scatter);
+  if (r.halving) summary["halving_check"] = halving_json(*r.halving);
+  if (!r.scatter.empty()) summary["size_scatter"] = size_scatter_json(r.scatter);
+}
+
+// Writes the study: results.h5 (the table, preparation series and sweeps), then summary.json
+// and the charts.
+void write_study(SceneOutput& output, const Setup& s, const StudyResults& r) {
+  r.out.write_results(output.h5(), elastic_moduli_units());
+  write_study_summary(s, r, output.summary());
+  output.finish({"table"});
 }
 
 }  // namespace
@@ -394,35 +520,10 @@ void run_elastic_moduli(const SceneFile& scene, const RunOptions& opts) {
   if (!begin_outputs(opts)) return;
   SceneOutput output(scene, opts, "elastic_moduli");
   output.summary();  // lists the keys read so far
-  Outputs out;
-  // Finished preparation variants are checkpointed here; a fresh run starts without them.
-  StudyParts study;
-  study.parts = open_study_checkpoints(opts.out_dir, opts.resume);
-  study.fingerprint = moduli_parameters_fingerprint(scene.used());
-  // Over several ranks each runs its share of the variants and rank 0 reads every part back
-  // in variant order; one rank runs them all, in order, as parts of a single process.
-  const bool spread = ensemble::size() > 1;
-  for (const PrepVariant& v : s.variants)
-    study.names.push_back("variant_" + std::to_string(&v - s.variants.data()) +
-                          (v.tag.empty() ? "" : "_" + v.tag));
-  if (s.start_from.empty())
-    study.deal = deal_study_units(study.parts, study.names, study.fingerprint, opts.resume);
-  bool stopped = false;
-  std::vector<std::string> ran, configs_written;
-  with_contact_model(s.contact, [&](const auto& model) {
-    if (!s.start_from.empty()) {
-      probe_start(s, model, out);
-    } else {
-      stopped = !run_variants(s, model, opts, study, out, ran, configs_written);
-    }
-  });
-  if (spread && s.start_from.empty())
-    stopped = gather_study_units(study.parts, study.names, ran, configs_written, study.fingerprint,
-                                 stopped, out);
-  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
-  out.write_results(output.h5(), elastic_moduli_units());
-  write_study_summary(s, out, output.summary());
-  output.finish({"table"});
+  const StudyParts study = open_study(scene, opts, s);
+  const std::optional<StudyResults> results = run_study(s, opts, study);
+  if (!results) return;  // the checkpoints in variants/ are the output so far
+  write_study(output, s, *results);
   remove_study_checkpoints(study.parts);  // everything is in results.h5 and summary.json now
 }
 
