@@ -350,11 +350,14 @@ Probed probe_state(const ConfigState& c, const MixtureModel& model, const DemPar
   return r;
 }
 
-// The skeleton of the state `sys` holds (mixture_skeleton.hpp) as columns of its table row.
-void add_skeleton_columns(const System& sys, int stiff, std::map<std::string, double>& row) {
+// The skeleton of the state `sys` holds (mixture_skeleton.hpp).
+Skeleton skeleton_of(const System& sys, int stiff) {
   const ParticleRows p = gather_by_identity(sys.particles());
-  const Skeleton k =
-      measure_skeleton(contact_network(sys), p.species, p.position, sys.box().len, stiff);
+  return measure_skeleton(contact_network(sys), p.species, p.position, sys.box().len, stiff);
+}
+
+// The skeleton as columns of a table row.
+void add_skeleton_columns(const Skeleton& k, std::map<std::string, double>& row) {
   row["skeleton_share_stiff_stiff"] = k.share[0];
   row["skeleton_share_stiff_soft"] = k.share[1];
   row["skeleton_share_soft_soft"] = k.share[2];
@@ -366,137 +369,222 @@ void add_skeleton_columns(const System& sys, int stiff, std::map<std::string, do
   row["skeleton_stiff_wrapping_axes"] = k.wrapping_axes;
 }
 
-// Prepares one variant and probes it at each of its pressures; rows go to `out`.
-void run_variant(const Setup& u, const Variant& v, ModuliOutputs& out, Progress& progress,
-                 long& done) {
-  const MixtureModel model = u.mats.model(v.rule);
-  const MixtureModel probe_model = u.keep_friction ? model : without_sliding(model);
-  // The same packing probed with the other rule (the probing model alone differs).
-  const bool reprobe = v.rule == u.mats.pair_rule && v.soft_fraction == u.check_fraction;
+// The models of a variant: the one it is prepared with, the one it is probed with, and the
+// other rule's probing model where the same packing is probed with it too (the probing
+// model alone differs).
+struct VariantModels {
+  MixtureModel model, probe, other_probe;
+  bool reprobe = false;
+};
+VariantModels variant_models(const Setup& u, const Variant& v) {
+  VariantModels r;
+  r.model = u.mats.model(v.rule);
+  r.probe = u.keep_friction ? r.model : without_sliding(r.model);
+  r.reprobe = v.rule == u.mats.pair_rule && v.soft_fraction == u.check_fraction;
   const MixtureModel other = u.mats.model(u.other_rule);
-  const MixtureModel other_probe = u.keep_friction ? other : without_sliding(other);
+  r.other_probe = u.keep_friction ? other : without_sliding(other);
+  return r;
+}
 
+// A variant's sample as it is taken through its pressures: the system, and the particles'
+// total mass, mean diameter and mass and solid density.
+struct Sample {
   PeriodicBox box;
-  const HostParticles host = start_of(u, v.soft_fraction, box);
-  const double mass = total_mass(host);
+  HostParticles host;
+  double mass = 0, dbar = 0, mbar = 0, rho_solid = 0;
+  std::optional<System> sys;
+};
+
+// The variant's gas, brought to its first pressure (the peak of an unloading branch): a fast
+// compression to phi_0, a relaxation, then a slower one until the packing carries that
+// pressure (the servo takes over from there). A packing file already denser than phi_0 skips
+// the fast compression (strain_to_phi returns at once).
+void compress_gas(const Setup& u, const Variant& v, const MixtureModel& model, Sample& p) {
+  p.host = start_of(u, v.soft_fraction, p.box);
+  const HostParticles& host = p.host;
+  p.mass = total_mass(host);
   double dsum = 0, vsolid = 0;
   for (int i = 0; i < host.size(); ++i)
     dsum += 2 * host.radius[i], vsolid += 4.0 / 3.0 * M_PI * std::pow(host.radius[i], 3);
-  const double dbar = dsum / host.size(), mbar = mass / host.size();
-  const double rho_solid = mass / vsolid;
-  std::optional<System> sys;
-  sys.emplace(Particles<Exec>::from_host(host), box, model, gas_params(u, host));
-  // Gas: fast compression to phi_0, a relaxation, then a slower one until the packing carries
-  // the first pressure (the servo takes over from there). A packing file already denser than
-  // phi_0 skips the fast compression (strain_to_phi returns at once).
-  strain_to_phi(*sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
-  sys->step(static_cast<long>(std::ceil(u.gas_relax_time / u.params.dt)));
+  p.dbar = dsum / host.size(), p.mbar = p.mass / host.size();
+  p.rho_solid = p.mass / vsolid;
+  p.sys.emplace(Particles<Exec>::from_host(host), p.box, model, gas_params(u, host));
+  strain_to_phi(*p.sys, u.phi0, -u.gas_rate / 3, 500, nullptr);
+  p.sys->step(static_cast<long>(std::ceil(u.gas_relax_time / u.params.dt)));
   const double peak = u.unload_from > 0 ? u.unload_from : v.pressures.front();
-  compress_to_pressure(*sys, peak, u.approach_rate, 20, 0.74);
-  // The unloading branch starts from a relaxed state at its peak pressure (not probed).
-  bool at_peak = u.unload_from > 0;
-  std::vector<double> targets = v.pressures;
-  if (at_peak) targets.insert(targets.begin(), u.unload_from);
-
-  for (double target : targets) {
-    // Damping scaled with the crossing time this packing will have at the target
-    // (K ∝ P^{1/3} for Hertz, so t_c ∝ P^{-1/6}).
-    Measurements m = sys->measure();
-    double rho = mass / sys->box().volume();
-    double tc = crossing_time(m, rho, longest_edge(sys->box()));
-    if (std::isfinite(tc) && m.pressure > 0) tc *= std::pow(m.pressure / target, 1.0 / 6.0);
-    if (!std::isfinite(tc)) tc = u.servo.max_phase_steps * u.params.dt;
-    const DemParams params = with_damping(u.params, u.damping_crossings * tc, mbar, dbar);
-    {
-      const ConfigState c = snapshot(*sys, host.density, m.pressure);
-      sys.emplace(restart_system<System>(c, model, params));
-    }
-    const ServoResult sr = servo_to_pressure(*sys, target, rho, u.servo);
-    if (at_peak) {
-      at_peak = false;
-      if (!sr.converged)
-        std::cerr << v.tag
-                  << ": the servo did not settle at the unloading branch's peak P = " << target
-                  << " MPa within " << u.servo.max_cycles
-                  << " checks; the branch goes down from P = " << sr.m.pressure << " MPa\n";
-      continue;
-    }
-    m = sr.m;
-    rho = mass / sys->box().volume();
-    tc = crossing_time(m, rho, longest_edge(sys->box()));
-    const ConfigState c = snapshot(*sys, host.density, m.pressure);
-    // A state the servo brought to rest at its target carries that pressure: it is jammed
-    // whatever share of its beads rattle (soft beads much smaller than the stiff ones sit in
-    // its pores by the thousand; is_jammed's count, at most half the particles rattling, is
-    // meant for one size).
-    const bool jammed = (is_jammed(m) || (sr.converged && m.z_corrected > 0)) && std::isfinite(tc);
-    // A state the servo left short of its target, or still moving, is not the state asked
-    // for: its moduli are not measured (NaN) and it is left out of the fits, unless the scene
-    // asks for it to be probed as it is.
-    const bool probed = jammed && (sr.converged || u.probe_unconverged);
-    if (!sr.converged)
-      std::cerr << v.tag << ": the servo did not reach P = " << target << " MPa within "
-                << u.servo.max_cycles << " checks (P = " << m.pressure
-                << ", E_kin/E_pot = " << sr.ekin_ratio << " against " << u.servo.ekin_ratio << "); "
-                << (probed ? "probed as it is (preparation.probe_unconverged)"
-                           : "not probed: raise preparation.max_checks, or set "
-                             "preparation.probe_unconverged = true to probe it as it is")
-                << "\n";
-    Probed pr;
-    if (probed) pr = probe_state(c, probe_model, params, u, tc);
-    double M_other = kNaN;
-    if (probed && reprobe && listed(u.check_pressures, target))
-      M_other = probe_state(c, other_probe, params, u, tc).mod.M;
-    const Moduli& mod = pr.mod;
-    const double unmeasured = jammed ? kNaN : 0.0;
-    const double mkg = mod.K + 4 * mod.G / 3;
-    std::map<std::string, double> row = {
-        {"soft_fraction", v.soft_fraction},
-        {"pair_rule_product_over_sum", v.rule == "product_over_sum" ? 1.0 : 0.0},
-        {"pressure_target", target},
-        {"pressure", m.pressure},
-        {"servo_converged", sr.converged ? 1.0 : 0.0},
-        {"servo_checks", static_cast<double>(sr.cycles)},
-        {"servo_steps", static_cast<double>(sr.steps)},
-        {"ekin_over_epot", sr.ekin_ratio},
-        {"jammed", jammed ? 1.0 : 0.0},
-        {"probed", probed ? 1.0 : 0.0},
-        {"particles", static_cast<double>(c.size())},
-        {"phi", m.phi},
-        {"z_corrected", m.z_corrected},
-        {"z_mean", m.z},
-        {"rattler_fraction", m.rattlers / m.particles},
-        {"max_overlap", m.max_overlap},
-        {"rho_bulk", rho},
-        {"rho_solid", rho_solid},
-        {"crossing_time", tc},
-        {"damping_time", u.damping_crossings * tc},
-        {"probe_strain_steps", static_cast<double>(pr.strain_steps)},
-        {"probe_relax_steps", static_cast<double>(pr.relax_steps)},
-        // No contact network: no stiffness (0); a network not probed: not measured (NaN).
-        {"K", probed ? mod.K : unmeasured},
-        {"G", probed ? mod.G : unmeasured},
-        {"M", probed ? mod.M : unmeasured},
-        {"M_KG", probed ? mkg : unmeasured},
-        {"M_over_M_KG", probed ? mod.M / mkg : kNaN},
-        {"Vp", probed && mod.M > 0 ? 1000.0 * std::sqrt(mod.M / rho) : unmeasured},  // m/s
-        {"isotropic_reversal_residual", pr.reversal},
-        {"M_other_rule_same_packing", M_other},
-    };
-    if (u.skeleton) add_skeleton_columns(*sys, u.stiff, row);
-    out.add_row(v.tag, row);
-    progress.update(++done);
-    char line[256];
-    std::snprintf(line, sizeof line,
-                  "%s  P %.4g MPa (target %.4g, %d checks)  phi %.4f  Z %.3f  K %.4g  G %.4g  "
-                  "M %.4g MPa  M/(K+4G/3) %.4f  Vp %.0f m/s\n",
-                  v.tag.c_str(), m.pressure, target, sr.cycles, m.phi, m.z_corrected, row["K"],
-                  row["G"], row["M"], row["M_over_M_KG"], row["Vp"]);
-    if (progress.enabled()) std::cerr << line;
-  }
+  compress_to_pressure(*p.sys, peak, u.approach_rate, 20, 0.74);
 }
 
-// Units of the table's columns (run_variant's rows) in results.h5; a column without one is
+// The servo's run to one target, and the parameters (damping) it ran with.
+struct Settled {
+  DemParams params;
+  ServoResult servo;
+};
+
+// Brings the sample to `target` with the pressure servo, its damping scaled with the crossing
+// time this packing will have at the target (K ∝ P^{1/3} for Hertz, so t_c ∝ P^{-1/6}).
+Settled settle(const Setup& u, const MixtureModel& model, double target, Sample& p) {
+  const Measurements m = p.sys->measure();
+  const double rho = p.mass / p.sys->box().volume();
+  double tc = crossing_time(m, rho, longest_edge(p.sys->box()));
+  if (std::isfinite(tc) && m.pressure > 0) tc *= std::pow(m.pressure / target, 1.0 / 6.0);
+  if (!std::isfinite(tc)) tc = u.servo.max_phase_steps * u.params.dt;
+  Settled r;
+  r.params = with_damping(u.params, u.damping_crossings * tc, p.mbar, p.dbar);
+  {
+    const ConfigState c = snapshot(*p.sys, p.host.density, m.pressure);
+    p.sys.emplace(restart_system<System>(c, model, r.params));
+  }
+  r.servo = servo_to_pressure(*p.sys, target, rho, u.servo);
+  return r;
+}
+
+// The unloading branch starts from a relaxed state at its peak pressure (not probed).
+void settle_at_peak(const Setup& u, const Variant& v, const MixtureModel& model, Sample& p) {
+  const ServoResult sr = settle(u, model, u.unload_from, p).servo;
+  if (!sr.converged)
+    std::cerr << v.tag
+              << ": the servo did not settle at the unloading branch's peak P = " << u.unload_from
+              << " MPa within " << u.servo.max_cycles
+              << " checks; the branch goes down from P = " << sr.m.pressure << " MPa\n";
+}
+
+// What one state of a variant gave: the servo's run to its target, the state's measurements,
+// bulk density and crossing time, whether it is jammed and was probed, its moduli (and M
+// under the other rule, where the check asks for it) and its skeleton.
+struct MixtureState {
+  double target = 0;
+  ServoResult servo;
+  Measurements m;
+  double rho = 0, rho_solid = 0, tc = 0, damping_time = 0;
+  int particles = 0;
+  bool jammed = false, probed = false;
+  Probed probe;
+  double M_other = kNaN;
+  std::optional<Skeleton> skeleton;
+};
+
+// A state the servo left short of its target, or still moving: said on the console.
+void report_unconverged(const Setup& u, const Variant& v, const MixtureState& s) {
+  std::cerr << v.tag << ": the servo did not reach P = " << s.target << " MPa within "
+            << u.servo.max_cycles << " checks (P = " << s.m.pressure
+            << ", E_kin/E_pot = " << s.servo.ekin_ratio << " against " << u.servo.ekin_ratio
+            << "); "
+            << (s.probed ? "probed as it is (preparation.probe_unconverged)"
+                         : "not probed: raise preparation.max_checks, or set "
+                           "preparation.probe_unconverged = true to probe it as it is")
+            << "\n";
+}
+
+// Measures and probes the state the servo left the sample in at `target`.
+MixtureState measure_state(const Setup& u, const Variant& v, const VariantModels& models,
+                           const Sample& p, double target, const Settled& settled) {
+  MixtureState s;
+  const ServoResult& sr = settled.servo;
+  s.target = target, s.servo = sr, s.m = sr.m;
+  s.rho = p.mass / p.sys->box().volume(), s.rho_solid = p.rho_solid;
+  s.tc = crossing_time(s.m, s.rho, longest_edge(p.sys->box()));
+  s.damping_time = u.damping_crossings * s.tc;
+  const ConfigState c = snapshot(*p.sys, p.host.density, s.m.pressure);
+  s.particles = c.size();
+  // A state the servo brought to rest at its target carries that pressure: it is jammed
+  // whatever share of its beads rattle (soft beads much smaller than the stiff ones sit in
+  // its pores by the thousand; is_jammed's count, at most half the particles rattling, is
+  // meant for one size).
+  s.jammed = (is_jammed(s.m) || (sr.converged && s.m.z_corrected > 0)) && std::isfinite(s.tc);
+  // A state the servo left short of its target, or still moving, is not the state asked
+  // for: its moduli are not measured (NaN) and it is left out of the fits, unless the scene
+  // asks for it to be probed as it is.
+  s.probed = s.jammed && (sr.converged || u.probe_unconverged);
+  if (!sr.converged) report_unconverged(u, v, s);
+  if (s.probed) s.probe = probe_state(c, models.probe, settled.params, u, s.tc);
+  if (s.probed && models.reprobe && listed(u.check_pressures, target))
+    s.M_other = probe_state(c, models.other_probe, settled.params, u, s.tc).mod.M;
+  if (u.skeleton) s.skeleton = skeleton_of(*p.sys, u.stiff);
+  return s;
+}
+
+// The table row of one state.
+std::map<std::string, double> state_row(const Variant& v, const MixtureState& s) {
+  const Measurements& m = s.m;
+  const Moduli& mod = s.probe.mod;
+  const bool probed = s.probed;
+  const double unmeasured = s.jammed ? kNaN : 0.0;
+  const double mkg = mod.K + 4 * mod.G / 3;
+  std::map<std::string, double> row = {
+      {"soft_fraction", v.soft_fraction},
+      {"pair_rule_product_over_sum", v.rule == "product_over_sum" ? 1.0 : 0.0},
+      {"pressure_target", s.target},
+      {"pressure", m.pressure},
+      {"servo_converged", s.servo.converged ? 1.0 : 0.0},
+      {"servo_checks", static_cast<double>(s.servo.cycles)},
+      {"servo_steps", static_cast<double>(s.servo.steps)},
+      {"ekin_over_epot", s.servo.ekin_ratio},
+      {"jammed", s.jammed ? 1.0 : 0.0},
+      {"probed", probed ? 1.0 : 0.0},
+      {"particles", static_cast<double>(s.particles)},
+      {"phi", m.phi},
+      {"z_corrected", m.z_corrected},
+      {"z_mean", m.z},
+      {"rattler_fraction", m.rattlers / m.particles},
+      {"max_overlap", m.max_overlap},
+      {"rho_bulk", s.rho},
+      {"rho_solid", s.rho_solid},
+      {"crossing_time", s.tc},
+      {"damping_time", s.damping_time},
+      {"probe_strain_steps", static_cast<double>(s.probe.strain_steps)},
+      {"probe_relax_steps", static_cast<double>(s.probe.relax_steps)},
+      // No contact network: no stiffness (0); a network not probed: not measured (NaN).
+      {"K", probed ? mod.K : unmeasured},
+      {"G", probed ? mod.G : unmeasured},
+      {"M", probed ? mod.M : unmeasured},
+      {"M_KG", probed ? mkg : unmeasured},
+      {"M_over_M_KG", probed ? mod.M / mkg : kNaN},
+      {"Vp", probed && mod.M > 0 ? 1000.0 * std::sqrt(mod.M / s.rho) : unmeasured},  // m/s
+      {"isotropic_reversal_residual", s.probe.reversal},
+      {"M_other_rule_same_packing", s.M_other},
+  };
+  if (s.skeleton) add_skeleton_columns(*s.skeleton, row);
+  return row;
+}
+
+// The console line of one state (with the progress line shown).
+void report_state(const Variant& v, const MixtureState& s, std::map<std::string, double> row,
+                  const Progress& progress) {
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "%s  P %.4g MPa (target %.4g, %d checks)  phi %.4f  Z %.3f  K %.4g  G %.4g  "
+                "M %.4g MPa  M/(K+4G/3) %.4f  Vp %.0f m/s\n",
+                v.tag.c_str(), s.m.pressure, s.target, s.servo.cycles, s.m.phi, s.m.z_corrected,
+                row["K"], row["G"], row["M"], row["M_over_M_KG"], row["Vp"]);
+  if (progress.enabled()) std::cerr << line;
+}
+
+// Prepares one variant and probes it at each of its pressures; returns its states in order.
+std::vector<MixtureState> run_variant(const Setup& u, const Variant& v, Progress& progress,
+                                      long& done) {
+  const VariantModels models = variant_models(u, v);
+  Sample p;
+  compress_gas(u, v, models.model, p);
+  if (u.unload_from > 0) settle_at_peak(u, v, models.model, p);
+  std::vector<MixtureState> states;
+  for (double target : v.pressures) {
+    const Settled settled = settle(u, models.model, target, p);
+    states.push_back(measure_state(u, v, models, p, target, settled));
+    progress.update(++done);
+    report_state(v, states.back(), state_row(v, states.back()), progress);
+  }
+  return states;
+}
+
+// A variant's states as its part of the study's outputs (its checkpoint).
+ModuliOutputs variant_part(const Variant& v, const std::vector<MixtureState>& states) {
+  ModuliOutputs part;
+  for (const MixtureState& s : states) part.add_row(v.tag, state_row(v, s));
+  return part;
+}
+
+// Units of the table's columns (state_row's) in results.h5; a column without one is
 // a programming error (std::logic_error), found before anything is written.
 std::string table_unit(const std::string& column) {
   static const std::map<std::string, std::string> units = {
@@ -740,12 +828,20 @@ Json m_ratio_range(const std::map<std::string, std::vector<double>>& T) {
   return lo <= hi || std::isnan(lo) || std::isnan(hi) ? Json(std::vector<double>{lo, hi}) : Json();
 }
 
+// What this rank's mixtures returned: each one's part in mixture order (those a resumed run
+// took from their checkpoints included; over several ranks none, rank 0 reads every part
+// back), the parts this rank ran, and whether it stopped before its end
+// (--stop-after-minutes: the checkpoints are its output so far).
+struct MixturesRun {
+  std::vector<ModuliOutputs> parts;
+  std::vector<std::string> ran;
+  bool stopped = false;
+};
+
 // Runs this rank's mixtures, each saved as a checkpoint part; those a resumed run finds done
-// are taken from their parts. False when the run stopped before its end
-// (--stop-after-minutes): the checkpoints are its output so far.
-bool run_mixtures(const Setup& u, const RunOptions& opts, const std::string& parts,
-                  const std::string& fingerprint, const std::vector<std::string>& names,
-                  ModuliOutputs& out, std::vector<std::string>& ran) {
+// are taken from their parts.
+MixturesRun run_mixtures(const Setup& u, const RunOptions& opts, const std::string& parts,
+                         const std::string& fingerprint, const std::vector<std::string>& names) {
   const bool spread = ensemble::size() > 1;
   const StudyDeal deal = deal_study_units(parts, names, fingerprint, opts.resume);
   long total = 0, done = 0;
@@ -753,14 +849,16 @@ bool run_mixtures(const Setup& u, const RunOptions& opts, const std::string& par
     if (deal.done[k] || deal.mine(k)) total += static_cast<long>(u.variants[k].pressures.size());
   Progress progress("mixtures", total, opts.progress);
   const auto start = std::chrono::steady_clock::now();
+  MixturesRun run;
   for (size_t k = 0; k < u.variants.size(); ++k) {
     const Variant& v = u.variants[k];
     const std::string& name = names[k];
-    ModuliOutputs part;
     if (deal.done[k]) {
       std::cerr << ensemble::prefix() << v.tag << ": taken from the checkpoint in " << parts
                 << "\n";
-      if (!spread && load_moduli_part(parts, name, fingerprint, part)) out.append(part);
+      ModuliOutputs part;
+      if (!spread && load_moduli_part(parts, name, fingerprint, part))
+        run.parts.push_back(std::move(part));
       progress.update(done += static_cast<long>(v.pressures.size()));
       continue;
     }
@@ -770,52 +868,22 @@ bool run_mixtures(const Setup& u, const RunOptions& opts, const std::string& par
     if (opts.stop_after_minutes > 0 && minutes >= opts.stop_after_minutes) {
       std::cerr << ensemble::prefix() << "stopped before variant " << k + 1 << " of "
                 << u.variants.size() << " (--stop-after-minutes); continue with --resume\n";
-      return false;
+      run.stopped = true;
+      return run;
     }
-    run_variant(u, v, part, progress, done);
+    ModuliOutputs part = variant_part(v, run_variant(u, v, progress, done));
     save_moduli_part(parts, name, fingerprint, part);
-    ran.push_back(name);
-    if (!spread) out.append(part);
+    run.ran.push_back(name);
+    if (!spread) run.parts.push_back(std::move(part));
   }
   if (ensemble::root()) progress.finish();  // the other ranks wrote their parts
-  return true;
+  return run;
 }
 
-}  // namespace
-
-void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
-
-void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
-  const Setup u = read_setup(scene);
-  require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
-  check_first_system(scene, opts, [&] {  // each mixture's gas, as run_variant builds it
-    for (const Variant& v : u.variants) {
-      PeriodicBox box;
-      const HostParticles host = start_of(u, v.soft_fraction, box);
-      System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
-    }
-  });
-  if (!begin_outputs(opts)) return;
-  // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
-  // when every variant is done, so an interrupted run leaves nothing that looks finished.
-  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
-  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
-  if (ensemble::root())
-    for (const char* f : {"/summary.json", "/results.h5"})
-      std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
-
-  // Over several ranks each runs its share of the mixtures and rank 0 reads every part back
-  // in mixture order; one rank runs them all, in order, as parts of a single process.
-  std::vector<std::string> names;
-  for (size_t k = 0; k < u.variants.size(); ++k)
-    names.push_back("variant_" + std::to_string(k) + "_" + u.variants[k].tag);
-  ModuliOutputs out;
-  std::vector<std::string> ran;
-  bool stopped = !run_mixtures(u, opts, parts, fingerprint, names, out, ran);
-  if (ensemble::size() > 1)
-    stopped = gather_study_units(parts, names, ran, {}, fingerprint, stopped, out);
-  if (!ensemble::root() || stopped) return;  // the checkpoints in variants/ are the output so far
-
+// Writes the study from its table (every mixture's rows in order): results.h5 (the table and
+// the power-law fits), then summary.json and the charts.
+void write_study(const SceneFile& scene, const RunOptions& opts, const Setup& u,
+                 const ModuliOutputs& out) {
   const auto& T = out.table;
   const PowerLawFits fits = power_law_fits(u, T);
   const Json rule = u.check_pressures.empty() ? Json::object() : pair_rule_check(u, T);
@@ -837,6 +905,44 @@ void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
   summary["unconverged_states"] = unconverged_states(T);
   summary["M_over_K_plus_4G_3_range"] = m_ratio_range(T);
   output.finish({"table"});
+}
+
+}  // namespace
+
+void check_mixture_moduli(const SceneFile& scene) { read_setup(scene); }
+
+void run_mixture_moduli(const SceneFile& scene, const RunOptions& opts) {
+  const Setup u = read_setup(scene);
+  require_checkpoint_to_resume(opts, study_checkpoints(opts.out_dir));
+  check_first_system(scene, opts, [&] {  // each mixture's gas, as compress_gas builds it
+    for (const Variant& v : u.variants) {
+      PeriodicBox box;
+      const HostParticles host = start_of(u, v.soft_fraction, box);
+      System(Particles<Exec>::from_host(host), box, u.mats.model(v.rule), gas_params(u, host));
+    }
+  });
+  if (!begin_outputs(opts)) return;
+  // Finished variants are checkpointed in variants/; summary.json and results.h5 appear only
+  // when every variant is done, so an interrupted run leaves nothing that looks finished.
+  const std::string parts = open_study_checkpoints(opts.out_dir, opts.resume);
+  const std::string fingerprint = moduli_parameters_fingerprint(scene.used());
+  if (ensemble::root())
+    for (const char* f : {"/summary.json", "/results.h5"})
+      std::filesystem::remove(opts.out_dir + f);  // never beside checkpoints of a newer run
+
+  // Over several ranks each runs its share of the mixtures and rank 0 reads every part back
+  // in mixture order; one rank runs them all, in order, as parts of a single process.
+  std::vector<std::string> names;
+  for (size_t k = 0; k < u.variants.size(); ++k)
+    names.push_back("variant_" + std::to_string(k) + "_" + u.variants[k].tag);
+  MixturesRun run = run_mixtures(u, opts, parts, fingerprint, names);
+  ModuliOutputs out;
+  if (ensemble::size() > 1)
+    run.stopped = gather_study_units(parts, names, run.ran, {}, fingerprint, run.stopped, out);
+  else
+    for (const ModuliOutputs& part : run.parts) out.append(part);
+  if (!ensemble::root() || run.stopped) return;  // the checkpoints in variants/ are the output
+  write_study(scene, opts, u, out);
   remove_study_checkpoints(parts);  // everything is in results.h5 and summary.json now
 }
 
