@@ -256,10 +256,12 @@ ImpulseSetup read_setup(const SceneFile& scene) {
   scene.require(s.t_max / cs.sample_every <= 1e9, "time.t_max",
                 "asks for more than 1e9 samples of time.sample_every");
   s.samples = std::lround(s.t_max / cs.sample_every);
-  // Every block of realizations keeps an energy profile per sample and bead, and the
-  // ensemble series another: refused here, naming the key, rather than failing to allocate.
+  // Every block of realizations keeps an energy profile per sample and bead and their sum
+  // another, and the ensemble series of every disorder (a profile each) are kept until the
+  // run is written: refused here, naming the key, rather than failing to allocate.
   const double blocks = std::ceil(double(cs.realizations) / kRealizationBlock);
-  scene.require_memory("time.t_max", 8.0 * (blocks + 2) * (s.samples + 1.0) * (N + 6.0));
+  const double series = static_cast<double>(cs.xis.size());
+  scene.require_memory("time.t_max", 8.0 * (blocks + 1 + series) * (s.samples + 1.0) * (N + 6.0));
   return s;
 }
 
@@ -337,9 +339,51 @@ ImpulseAnalysis analyse(const ImpulseSetup& s, const ImpulseSeries& run) {
   return a;
 }
 
+// One disorder's ensemble series, what it shows, and its wall time (rank 0).
+struct ImpulseAtXi {
+  double xi = 0;
+  ImpulseSeries series;
+  ImpulseAnalysis analysis;
+  double seconds = 0;
+};
+
+// The warning of a drifting energy, and the line of one disorder.
+void report(const ImpulseSetup& s, const ImpulseAtXi& x) {
+  const ImpulseSeries& run = x.series;
+  const ImpulseAnalysis& a = x.analysis;
+  const double worst_drift = *std::max_element(run.drift.begin(), run.drift.end());
+  if (worst_drift > 0.01)
+    std::cerr << "warning: xi = " << x.xi << ": the energy of some realization drifted by "
+              << 100 * worst_drift << " % (Verlet near the stability limit of its lightest "
+              << "beads); a smaller time.dt or a larger disorder.min_mass reduces it\n";
+  std::cout << "xi = " << x.xi << ": source keeps " << a.residual / a.energy0 << " of the energy ("
+            << a.residual_ratio << " per realization), r^2 ~ t^" << a.exponent
+            << ", R - source = " << run.centre.back() - s.source << " (" << x.seconds << " s)\n";
+}
+
+// Every disorder's ensemble (rank 0 gets the series and analyses them, a line each as it
+// ends; the other ranks run their blocks and get nothing).
+std::vector<ImpulseAtXi> run_all(ImpulseSetup& s, bool progress) {
+  std::vector<ImpulseAtXi> all;
+  for (size_t k = 0; k < s.cs.xis.size(); ++k) {
+    WallClock clock;
+    ImpulseSeries series = run_xi(s, k, progress);
+    if (!ensemble::root()) continue;
+    ImpulseAtXi x;
+    x.xi = s.cs.xis[k];
+    x.series = std::move(series);
+    x.seconds = clock.seconds();
+    x.analysis = analyse(s, x.series);
+    report(s, x);
+    all.push_back(std::move(x));
+  }
+  return all;
+}
+
 // Group /xi_<k> of results.h5.
-void write_xi_group(H5Writer& h5, size_t k, const ImpulseSetup& s, const ImpulseSeries& run,
-                    const ImpulseAnalysis& a) {
+void write_xi_group(H5Writer& h5, size_t k, const ImpulseSetup& s, const ImpulseAtXi& x) {
+  const ImpulseSeries& run = x.series;
+  const ImpulseAnalysis& a = x.analysis;
   const std::string g = "/xi_" + std::to_string(k);
   // Reduced units (docs/model_chains.md §1), so every unit is "1": time in t_c, energies in
   // F_0 Delta_0 (= m_0 Delta_0^2 / t_c^2), centre and width in bead indices; the source
@@ -352,7 +396,7 @@ void write_xi_group(H5Writer& h5, size_t k, const ImpulseSetup& s, const Impulse
   write_quantity(h5, g + "/source_energy", run.source_energy, "1");
   write_quantity(h5, g + "/source_fraction_per_realization", run.source_ratio, "1");
   write_quantity(h5, g + "/energy_drift", run.drift, "1");
-  h5.attribute(g, "xi", s.cs.spec.xi);
+  h5.attribute(g, "xi", x.xi);
   h5.attribute(g, "t_front_far_end", a.t_front);
   h5.attribute(g, "analysis_end_sample", static_cast<double>(a.s_end));
   h5.attribute(g, "near_exponential_rate", a.near_exp.exponent);
@@ -365,13 +409,14 @@ void write_xi_group(H5Writer& h5, size_t k, const ImpulseSetup& s, const Impulse
   h5.attribute(g, "far_exponential_prefactor", a.far_exp.prefactor);
 }
 
-// The run at one disorder in summary.json (`seconds`: its wall time).
-Json run_json(const ImpulseSetup& s, const ImpulseSeries& run, const ImpulseAnalysis& a,
-              double seconds) {
+// The run at one disorder in summary.json (`wall_seconds`: its wall time).
+Json run_json(const ImpulseSetup& s, const ImpulseAtXi& x) {
   const ChainScene& cs = s.cs;
+  const ImpulseSeries& run = x.series;
+  const ImpulseAnalysis& a = x.analysis;
   const double decay_rate = -a.near_exp.exponent;
   Json j = Json::object();
-  j["xi"] = cs.spec.xi;
+  j["xi"] = x.xi;
   j["analysis_end_time"] = run.times[a.s_end];
   j["source_residual_ratio_of_ensemble_means"] = a.residual / a.energy0;
   j["source_residual_mean_of_realization_fractions"] = a.residual_ratio;
@@ -393,13 +438,41 @@ Json run_json(const ImpulseSetup& s, const ImpulseSeries& run, const ImpulseAnal
   j["exponent_fit_window"] = std::vector<double>{0.5 * a.t_end, run.times[a.s_end]};
   j["front_reaches_far_end_at"] = a.t_front;
   j["max_relative_energy_drift"] = *std::max_element(run.drift.begin(), run.drift.end());
-  j["wall_seconds"] = seconds;
+  j["wall_seconds"] = x.seconds;
   j["solver"] = cs.exact ? "exact" : "verlet";
   if (cs.exact)
-    j["seconds_per_realization"] = seconds / cs.realizations;
+    j["seconds_per_realization"] = x.seconds / cs.realizations;
   else
-    j["bead_steps_per_second"] = run.bead_steps / seconds;
+    j["bead_steps_per_second"] = run.bead_steps / x.seconds;
   return j;
+}
+
+// results.h5 (a group /xi_<k> per disorder, then the scene's attributes) and summary.json.
+void write_results(SceneOutput& output, const ImpulseSetup& s, const std::vector<ImpulseAtXi>& xis,
+                   const WallClock& clock) {
+  H5Writer& h5 = output.h5();
+  Json runs = Json::array();
+  std::vector<double> xi_values, residual_means, residual_ratios;
+  for (size_t k = 0; k < xis.size(); ++k) {
+    const ImpulseAnalysis& a = xis[k].analysis;
+    xi_values.push_back(xis[k].xi), residual_means.push_back(a.residual / a.energy0);
+    residual_ratios.push_back(a.residual_ratio);
+    write_xi_group(h5, k, s, xis[k]);
+    runs.push(run_json(s, xis[k]));
+  }
+  h5.attribute("/", "source", s.source);
+  h5.attribute("/", "energy0", 0.5 * s.v0 * s.v0);
+  h5.attribute("/", "beads", s.cs.spec.beads);
+  Json& summary = output.summary();
+  summary["runs"] = runs;
+  // Late-time source energy against disorder, a power law over the xi > 0 runs.
+  Json against_xi = Json::object();
+  against_xi["ratio_of_ensemble_means"] =
+      Json::or_null(fit_power_law(xi_values, residual_means).exponent);
+  against_xi["mean_of_realization_fractions"] =
+      Json::or_null(fit_power_law(xi_values, residual_ratios).exponent);
+  summary["source_residual_exponent_vs_xi"] = against_xi;
+  summary["wall_seconds"] = clock.seconds();
 }
 
 }  // namespace
@@ -407,48 +480,15 @@ Json run_json(const ImpulseSetup& s, const ImpulseSeries& run, const ImpulseAnal
 void run_chain_impulse(const SceneFile& scene, const RunOptions& opts) {
   ImpulseSetup s = read_setup(scene);
   if (!begin_outputs(opts)) return;
-  ChainScene& cs = s.cs;
   if (!ensemble::root()) {  // rank 0 alone analyses and writes
-    for (size_t k = 0; k < cs.xis.size(); ++k) run_xi(s, k, opts.progress);
+    run_all(s, opts.progress);
     return;
   }
   SceneOutput output(scene, opts, "chain_impulse");
-  H5Writer& h5 = output.h5();
-  Json& summary = output.summary();
-  Json runs = Json::array();
-  std::vector<double> xis, residual_means, residual_ratios;
-  WallClock total_clock;
-  for (size_t k = 0; k < cs.xis.size(); ++k) {
-    WallClock clock;
-    const ImpulseSeries run = run_xi(s, k, opts.progress);
-    const double seconds = clock.seconds();
-    const ImpulseAnalysis a = analyse(s, run);
-    xis.push_back(cs.spec.xi), residual_means.push_back(a.residual / a.energy0);
-    residual_ratios.push_back(a.residual_ratio);
-    write_xi_group(h5, k, s, run, a);
-    runs.push(run_json(s, run, a, seconds));
-    const double worst_drift = *std::max_element(run.drift.begin(), run.drift.end());
-    if (worst_drift > 0.01)
-      std::cerr << "warning: xi = " << cs.spec.xi << ": the energy of some realization drifted by "
-                << 100 * worst_drift << " % (Verlet near the stability limit of its lightest "
-                << "beads); a smaller time.dt or a larger disorder.min_mass reduces it\n";
-    std::cout << "xi = " << cs.spec.xi << ": source keeps " << a.residual / a.energy0
-              << " of the energy (" << a.residual_ratio << " per realization), r^2 ~ t^"
-              << a.exponent << ", R - source = " << run.centre.back() - s.source << " (" << seconds
-              << " s)\n";
-  }
-  h5.attribute("/", "source", s.source);
-  h5.attribute("/", "energy0", 0.5 * s.v0 * s.v0);
-  h5.attribute("/", "beads", cs.spec.beads);
-  summary["runs"] = runs;
-  // Late-time source energy against disorder, a power law over the xi > 0 runs.
-  Json against_xi = Json::object();
-  against_xi["ratio_of_ensemble_means"] =
-      Json::or_null(fit_power_law(xis, residual_means).exponent);
-  against_xi["mean_of_realization_fractions"] =
-      Json::or_null(fit_power_law(xis, residual_ratios).exponent);
-  summary["source_residual_exponent_vs_xi"] = against_xi;
-  summary["wall_seconds"] = total_clock.seconds();
+  output.h5();  // the partial results.h5 made now: an unwritable folder fails before the run
+  const WallClock clock;
+  const std::vector<ImpulseAtXi> xis = run_all(s, opts.progress);
+  write_results(output, s, xis, clock);
   output.finish();
 }
 
