@@ -147,15 +147,12 @@ std::string dump_of(const Simulation& s, bool si) {
   return lammps_dump_text(d);
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_granular, m) {
-  m.doc() = "granular: DEM of granular materials (compiled part; import granular instead)";
-  // A refused input is a ValueError, a run stopped by a guard a RuntimeError, each with the
-  // engine's message (which names the key and says what to change).
+// The engine's start and stop, and its errors as Python exceptions: a refused input is a
+// ValueError, a run stopped by a guard a RuntimeError, each with the engine's message (which
+// names the key and says what to change).
+void bind_runtime(py::module_& m) {
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<PhysicsError>(m, "PhysicsError", PyExc_RuntimeError);
-
   m.def("initialize", &ensure_kokkos, py::arg("threads") = 0,
         "Start the engine with this many host threads (0: OMP_NUM_THREADS or all cores).");
   m.def("threads", [] {
@@ -169,24 +166,26 @@ PYBIND11_MODULE(_granular, m) {
     ensure_kokkos();
     return std::string(Kokkos::DefaultExecutionSpace::name());
   });
+}
 
-  py::class_<Packing>(m, "Packing", "Particles and their periodic box, in identity order.")
-      .def(py::init([](py::array_t<double, py::array::c_style | py::array::forcecast> positions,
-                       py::array_t<double, py::array::c_style | py::array::forcecast> radius,
-                       py::array_t<double, py::array::c_style | py::array::forcecast> density,
-                       std::array<double, 3> box_len, std::array<double, 3> box_lo) {
-             Packing p;
-             const int n = static_cast<int>(radius.size());
-             p.particles.resize(n);
-             set_xyz(p.particles, p.particles.x, p.particles.y, p.particles.z, positions,
-                     "positions");
-             p.particles.radius = column<double>(radius, n, "radius");
-             p.particles.density = column<double>(density, n, "density");
-             for (int d = 0; d < 3; ++d) p.box.len[d] = box_len[d], p.box.lo[d] = box_lo[d];
-             return p;
-           }),
-           py::arg("positions"), py::arg("radius"), py::arg("density"), py::arg("box_len"),
-           py::arg("box_lo") = std::array<double, 3>{0, 0, 0})
+// A Packing's particles: made from arrays, and each column read and set as an array.
+void bind_packing_particles(py::class_<Packing>& cls) {
+  cls.def(py::init([](py::array_t<double, py::array::c_style | py::array::forcecast> positions,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> radius,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> density,
+                      std::array<double, 3> box_len, std::array<double, 3> box_lo) {
+            Packing p;
+            const int n = static_cast<int>(radius.size());
+            p.particles.resize(n);
+            set_xyz(p.particles, p.particles.x, p.particles.y, p.particles.z, positions,
+                    "positions");
+            p.particles.radius = column<double>(radius, n, "radius");
+            p.particles.density = column<double>(density, n, "density");
+            for (int d = 0; d < 3; ++d) p.box.len[d] = box_len[d], p.box.lo[d] = box_lo[d];
+            return p;
+          }),
+          py::arg("positions"), py::arg("radius"), py::arg("density"), py::arg("box_len"),
+          py::arg("box_lo") = std::array<double, 3>{0, 0, 0})
       .def_property_readonly("size", [](const Packing& p) { return p.particles.size(); })
       .def_property(
           "positions",
@@ -226,15 +225,19 @@ PYBIND11_MODULE(_granular, m) {
           },
           [](Packing& p, py::array_t<int, py::array::c_style | py::array::forcecast> a) {
             p.particles.species = column<int>(a, p.particles.size(), "species");
-          })
-      .def_property(
-          "box_len",
-          [](const Packing& p) {
-            return std::array<double, 3>{p.box.len[0], p.box.len[1], p.box.len[2]};
-          },
-          [](Packing& p, std::array<double, 3> v) {
-            for (int d = 0; d < 3; ++d) p.box.len[d] = v[d];
-          })
+          });
+}
+
+// A Packing's periodic box.
+void bind_packing_box(py::class_<Packing>& cls) {
+  cls.def_property(
+         "box_len",
+         [](const Packing& p) {
+           return std::array<double, 3>{p.box.len[0], p.box.len[1], p.box.len[2]};
+         },
+         [](Packing& p, std::array<double, 3> v) {
+           for (int d = 0; d < 3; ++d) p.box.len[d] = v[d];
+         })
       .def_property(
           "box_lo",
           [](const Packing& p) {
@@ -251,7 +254,10 @@ PYBIND11_MODULE(_granular, m) {
           [](Packing& p, std::array<bool, 3> v) {
             for (int d = 0; d < 3; ++d) p.box.periodic[d] = v[d];
           });
+}
 
+// Packings from files and generators, saved states, and simulations made from either.
+void bind_factories(py::module_& m) {
   m.def(
       "lammps_data_text",
       [](const Packing& p) { return lammps_data_text(p.particles, p.box.lo, p.box.len); },
@@ -304,10 +310,13 @@ PYBIND11_MODULE(_granular, m) {
       py::arg("damping") = 0.0, py::arg("rotational_damping") = 0.0,
       py::arg("rattler_threshold") = 3, py::arg("max_overlap") = 0.3,
       py::arg("gravity") = std::array<double, 3>{0, 0, 0});
+}
 
-  using release = py::call_guard<py::gil_scoped_release>;
-  py::class_<Simulation>(m, "Simulation")
-      .def("step", &Simulation::step, py::arg("n"), release())
+using release = py::call_guard<py::gil_scoped_release>;
+
+// A simulation's stepping and what it holds: time, box, measures, particles, contacts.
+void bind_simulation_state(py::class_<Simulation>& cls) {
+  cls.def("step", &Simulation::step, py::arg("n"), release())
       .def_property("strain_rate", &Simulation::strain_rate,
                     [](Simulation& s, std::array<double, 3> r) { s.set_strain_rate(r); })
       .def_property_readonly("time", &Simulation::time)
@@ -337,24 +346,28 @@ PYBIND11_MODULE(_granular, m) {
              return p;
            })
       .def("forces", [](const Simulation& s) { return rows(s.forces(), 3); })
-      .def("contacts",
-           [](const Simulation& s) {
-             const ContactNetwork c = s.contacts();
-             py::dict d;
-             d["i"] = py::array_t<int>(c.i.size(), c.i.data());
-             d["j"] = py::array_t<int>(c.j.size(), c.j.data());
-             d["branch"] = rows(c.branch, 3);
-             d["normal_force"] = rows(c.normal_force, 1);
-             d["tangential_force"] = rows(c.tangential_force, 3);
-             d["overlap"] = rows(c.overlap, 1);
-             return d;
-           })
-      .def("set_walls",
-           [](Simulation& s, const py::list& walls) {
-             std::vector<WallSpec> specs;
-             for (auto w : walls) specs.push_back(wall_from(py::cast<py::dict>(w)));
-             s.set_walls(specs);
-           })
+      .def("contacts", [](const Simulation& s) {
+        const ContactNetwork c = s.contacts();
+        py::dict d;
+        d["i"] = py::array_t<int>(c.i.size(), c.i.data());
+        d["j"] = py::array_t<int>(c.j.size(), c.j.data());
+        d["branch"] = rows(c.branch, 3);
+        d["normal_force"] = rows(c.normal_force, 1);
+        d["tangential_force"] = rows(c.tangential_force, 3);
+        d["overlap"] = rows(c.overlap, 1);
+        return d;
+      });
+}
+
+// The protocols a simulation runs: walls, compression, relaxation, the pressure servo, the
+// moduli probe, and its dump, save and restart.
+void bind_simulation_protocols(py::class_<Simulation>& cls) {
+  cls.def("set_walls",
+          [](Simulation& s, const py::list& walls) {
+            std::vector<WallSpec> specs;
+            for (auto w : walls) specs.push_back(wall_from(py::cast<py::dict>(w)));
+            s.set_walls(specs);
+          })
       .def("wall_loads",
            [](const Simulation& s) {
              py::list out;
@@ -410,7 +423,10 @@ PYBIND11_MODULE(_granular, m) {
       .def("lammps_dump_text", &dump_of, py::arg("si") = true)
       .def("save", &Simulation::save)
       .def("restart", &Simulation::restart, py::arg("state"));
+}
 
+// The scene registry and the scene runner.
+void bind_scenes(py::module_& m) {
   m.def("scenes", [] {
     py::dict d;
     for (const SceneEntry& e : scene_registry()) d[e.name] = e.description;
@@ -436,4 +452,19 @@ PYBIND11_MODULE(_granular, m) {
       },
       py::arg("path"), py::arg("out_dir"), py::arg("charts") = false, py::arg("progress") = false,
       py::arg("check_only") = false);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_granular, m) {
+  m.doc() = "granular: DEM of granular materials (compiled part; import granular instead)";
+  bind_runtime(m);
+  py::class_<Packing> packing(m, "Packing", "Particles and their periodic box, in identity order.");
+  bind_packing_particles(packing);
+  bind_packing_box(packing);
+  bind_factories(m);
+  py::class_<Simulation> simulation(m, "Simulation");
+  bind_simulation_state(simulation);
+  bind_simulation_protocols(simulation);
+  bind_scenes(m);
 }
