@@ -11,7 +11,7 @@ ContinuumConstants ContinuumConstants::spec_example() {
   ContinuumConstants c;
   c.nu0 = 0.665, c.C0 = 4, c.C1 = 9.5, c.alpha = 0.375, c.g3 = 1.24, c.Fv0 = 3.63;
   c.K0 = 16005, c.K1 = 4350, c.G0 = 13700, c.G1 = 5083.5, c.G2 = 0.723653;
-  c.units = "as printed in continuum.md (no unit given there)";
+  c.units = "as the source prints them, without a unit (docs/model_continuum.md §6)";
   return c;
 }
 

@@ -338,7 +338,7 @@ void write_cases(SceneOutput& output, const BenchScene& b, const std::vector<Cas
   H5Writer& h5 = output.h5();
   Json& summary = output.summary();
   summary["coulomb_limit"] =
-      "mu |f_n| of the total normal force (elastic + dashpot), as dem.md writes it";
+      "mu |f_n| of the total normal force (elastic + dashpot), as docs/model_dem.md §3 writes it";
   Json cases = Json::array();
   for (size_t n = 0; n < runs.size(); ++n) {
     const BenchCase& c = b.cases[n];

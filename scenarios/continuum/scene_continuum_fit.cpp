@@ -374,7 +374,7 @@ struct ContinuumResults {
 void write_constants(SceneOutput& output, const SceneFile& scene, const Setup& s,
                      const std::vector<StudyFit>& fits) {
   std::ostringstream txt;
-  txt << "# Continuum-law constants (continuum.md) fitted by the continuum_fit scene ("
+  txt << "# Continuum-law constants (docs/model_continuum.md) fitted by the continuum_fit scene ("
       << scene.path() << ").\n"
       << "# K = K0 + K1 (F_v - F_v0), G = G0 + G1 (F_v - F_v0)^G2 in MPa (N/mm^2);\n"
       << "# C* = C0 + C1 (nu/nu0 - 1)^alpha (0 below nu0), F_v = C* g3 nu.\n"
