@@ -55,85 +55,82 @@ struct SectionRows {
   }
 };
 
-}  // namespace
-
-LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale,
-                            double mass_scale) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open LAMMPS data file " + path);
-  LammpsData out;
-  long natoms = -1;
-  std::string line;
-  std::getline(in, line);                                 // the first line is a title
-  SectionRows atoms{6, {}, {}, {}}, vels{6, {}, {}, {}};  // type d rho x y z; v, w
-  std::string section;
-  long lineno = 1;
-  auto fail = [&](const std::string& what) {
-    throw InputError(path + ":" + std::to_string(lineno) + ": " + what);
-  };
-  while (std::getline(in, line)) {
-    ++lineno;
-    const std::string s = strip_comment(line);
-    if (s.empty()) continue;
-    std::istringstream ss(s);
-    if (s == "Atoms" || s == "Velocities" || s == "Masses") {
-      section = s;
-      continue;
-    }
-    if (section.empty()) {  // header
-      double a, b, c;
-      std::string w1, w2, w3;
-      std::istringstream tt(s);
-      if ((tt >> a >> b >> c >> w1 >> w2 >> w3) && w1 == "xy" && w2 == "xz" && w3 == "yz") {
-        if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c))
-          fail("the tilt factors xy xz yz must be finite numbers");
-        out.tilt[0] = a * length_scale, out.tilt[1] = b * length_scale;
-        out.tilt[2] = c * length_scale;
-      } else if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
-        ss >> natoms;
-      } else if (s.find("atom types") != std::string::npos) {
-        if (!(ss >> out.atom_types) || out.atom_types < 1)
-          fail("'atom types' needs a positive count");
-      } else if ((ss >> a >> b >> w1 >> w2) && (w1 == "xlo" || w1 == "ylo" || w1 == "zlo")) {
-        const int d = w1[0] - 'x';
-        if (!std::isfinite(a) || !std::isfinite(b) || !(b > a))
-          fail("the box bounds " + w1 + " " + w2 + " must be finite with " + w2 + " > " + w1);
-        out.lo[d] = a * length_scale;
-        out.len[d] = (b - a) * length_scale;
-      }
-      continue;
-    }
-    std::vector<double> v;
-    double x;
-    long id;
-    if (!(ss >> id)) fail("expected an atom id");
-    while (ss >> x) v.push_back(x);
-    if (!ss.eof()) fail("not a number: '" + s + "'");
-    // Positions, sizes and velocities enter cell indices and time steps: NaN or inf there
-    // would be cast to an integer bin (undefined behaviour) instead of refused.
-    for (double value : v)
-      if (!std::isfinite(value)) fail("not a finite number: '" + s + "'");
-    if (section == "Atoms") {
-      if (v.size() < 6)
-        fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
-      const int ntypes = std::min(out.atom_types, kLammpsMaxTypes);
-      if (v[0] != std::floor(v[0]) || v[0] < 1 || v[0] > ntypes)
-        fail("atom type " + number(v[0]) + " outside 1.." + std::to_string(ntypes) +
-             " (atom types in the header, at most " + std::to_string(kLammpsMaxTypes) +
-             " species)");
-      if (!(v[1] > 0) || !(v[2] > 0)) fail("diameter and density must be positive");
-      atoms.add(id, lineno, v);
-    } else if (section == "Velocities") {
-      if (v.size() < 3) fail("Velocities line needs: id vx vy vz [wx wy wz]");
-      vels.add(id, lineno, v);
-    }
+// Where a data file is being read, so that a message names the file and the line.
+struct DataCursor {
+  const std::string& path;
+  long line = 1;
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
   }
+};
+
+// One line of the header: the tilt factors, the atom and type counts, or a pair of box bounds
+// (any other header line is LAMMPS' business and is skipped).
+void read_header_line(const std::string& s, double length_scale, const DataCursor& at,
+                      LammpsData& out, long& natoms) {
+  std::istringstream ss(s);
+  double a, b, c;
+  std::string w1, w2, w3;
+  std::istringstream tt(s);
+  if ((tt >> a >> b >> c >> w1 >> w2 >> w3) && w1 == "xy" && w2 == "xz" && w3 == "yz") {
+    if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c))
+      at.fail("the tilt factors xy xz yz must be finite numbers");
+    out.tilt[0] = a * length_scale, out.tilt[1] = b * length_scale;
+    out.tilt[2] = c * length_scale;
+  } else if (s.find("atoms") != std::string::npos && s.find("types") == std::string::npos) {
+    ss >> natoms;
+  } else if (s.find("atom types") != std::string::npos) {
+    if (!(ss >> out.atom_types) || out.atom_types < 1)
+      at.fail("'atom types' needs a positive count");
+  } else if ((ss >> a >> b >> w1 >> w2) && (w1 == "xlo" || w1 == "ylo" || w1 == "zlo")) {
+    const int d = w1[0] - 'x';
+    if (!std::isfinite(a) || !std::isfinite(b) || !(b > a))
+      at.fail("the box bounds " + w1 + " " + w2 + " must be finite with " + w2 + " > " + w1);
+    out.lo[d] = a * length_scale;
+    out.len[d] = (b - a) * length_scale;
+  }
+}
+
+// One row of the Atoms or Velocities section (an id, then numbers), checked and kept with its
+// line; rows of other sections (Masses) are read for their numbers and dropped.
+void read_section_row(const std::string& s, const std::string& section, int atom_types,
+                      const DataCursor& at, SectionRows& atoms, SectionRows& vels) {
+  std::istringstream ss(s);
+  std::vector<double> v;
+  double x;
+  long id;
+  if (!(ss >> id)) at.fail("expected an atom id");
+  while (ss >> x) v.push_back(x);
+  if (!ss.eof()) at.fail("not a number: '" + s + "'");
+  // Positions, sizes and velocities enter cell indices and time steps: NaN or inf there
+  // would be cast to an integer bin (undefined behaviour) instead of refused.
+  for (double value : v)
+    if (!std::isfinite(value)) at.fail("not a finite number: '" + s + "'");
+  if (section == "Atoms") {
+    if (v.size() < 6)
+      at.fail("Atoms line needs: id type diameter density x y z (atom style sphere)");
+    const int ntypes = std::min(atom_types, kLammpsMaxTypes);
+    if (v[0] != std::floor(v[0]) || v[0] < 1 || v[0] > ntypes)
+      at.fail("atom type " + number(v[0]) + " outside 1.." + std::to_string(ntypes) +
+              " (atom types in the header, at most " + std::to_string(kLammpsMaxTypes) +
+              " species)");
+    if (!(v[1] > 0) || !(v[2] > 0)) at.fail("diameter and density must be positive");
+    atoms.add(id, at.line, v);
+  } else if (section == "Velocities") {
+    if (v.size() < 3) at.fail("Velocities line needs: id vx vy vz [wx wy wz]");
+    vels.add(id, at.line, v);
+  }
+}
+
+// As many atoms as the header announced, each within the box's reach: atoms far outside it
+// (LAMMPS keeps them within it, with image flags) are a damaged file, not a periodic image,
+// refused with their line rather than binned at a wrong place.
+void check_atoms(const std::string& path, long natoms, const SectionRows& atoms,
+                 const LammpsData& out, double length_scale) {
   if (natoms < 0) throw InputError(path + ": header lacks the 'N atoms' line");
   if (static_cast<long>(atoms.size()) != natoms)
     throw InputError(path + ": header announces " + std::to_string(natoms) + " atoms, Atoms has " +
                      std::to_string(atoms.size()));
-  // Atoms far outside the box (LAMMPS keeps them within it, with image flags) are a damaged
-  // file, not a periodic image: refused with their line, not binned at a wrong place.
   for (size_t r = 0; r < atoms.size(); ++r)
     for (int d = 0; d < 3; ++d) {
       const double xd = atoms.row(r)[3 + d] * length_scale;
@@ -142,10 +139,16 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
                          std::to_string(atoms.id[r]) + " lies " + "more than 1000 box lengths " +
                          "outside the box along " + std::string(1, static_cast<char>('x' + d)));
     }
+}
+
+// The particles in ascending id, in the engine's units, each with its velocity (and spin)
+// where Velocities gives one; a velocity for an id that Atoms lacks is refused.
+void fill_particles(const std::string& path, const SectionRows& atoms, const SectionRows& vels,
+                    double length_scale, double time_scale, double mass_scale, LammpsData& out) {
   const std::vector<size_t> by_id = atoms.sorted(path, "atom id");
   const std::vector<size_t> vel_by_id = vels.sorted(path, "velocity of atom");
   HostParticles& h = out.particles;
-  h.resize(static_cast<int>(natoms));
+  h.resize(static_cast<int>(atoms.size()));
   const double vscale = length_scale / time_scale;
   out.ids.reserve(atoms.size());
   size_t q = 0;  // next velocity row, in ascending id as the atoms
@@ -169,6 +172,34 @@ LammpsData read_lammps_data(const std::string& path, double length_scale, double
   if (q < vel_by_id.size())
     throw InputError(path + ": Velocities names atom " + std::to_string(vels.id[vel_by_id[q]]) +
                      ", which is not in Atoms");
+}
+
+}  // namespace
+
+LammpsData read_lammps_data(const std::string& path, double length_scale, double time_scale,
+                            double mass_scale) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open LAMMPS data file " + path);
+  LammpsData out;
+  long natoms = -1;
+  std::string line;
+  std::getline(in, line);                                 // the first line is a title
+  SectionRows atoms{6, {}, {}, {}}, vels{6, {}, {}, {}};  // type d rho x y z; v, w
+  std::string section;
+  DataCursor at{path};
+  while (std::getline(in, line)) {
+    ++at.line;
+    const std::string s = strip_comment(line);
+    if (s.empty()) continue;
+    if (s == "Atoms" || s == "Velocities" || s == "Masses")
+      section = s;
+    else if (section.empty())
+      read_header_line(s, length_scale, at, out, natoms);
+    else
+      read_section_row(s, section, out.atom_types, at, atoms, vels);
+  }
+  check_atoms(path, natoms, atoms, out, length_scale);
+  fill_particles(path, atoms, vels, length_scale, time_scale, mass_scale, out);
   return out;
 }
 

@@ -85,6 +85,52 @@ void parse_classic(LammpsPairModel& m, const std::vector<std::string>& a, const 
   if (m.style == LammpsStyle::GranHertzHistory) m.kn /= u.nktv2p, m.kt /= u.nktv2p;
 }
 
+// `damping <model>` at a[k]; returns the index after it.
+size_t parse_granular_damping(const std::vector<std::string>& a, size_t k, const std::string& where,
+                              GranularPair& p) {
+  const std::string& d = a[k + 1];
+  if (d == "velocity")
+    p.damping = GranularPair::Velocity;
+  else if (d == "mass_velocity")
+    p.damping = GranularPair::MassVelocity;
+  else if (d == "viscoelastic")
+    p.damping = GranularPair::Viscoelastic;
+  else if (d == "tsuji")
+    p.damping = GranularPair::Tsuji;
+  else
+    throw InputError(where + ": damping model '" + d +
+                     "' is not one of velocity, "
+                     "mass_velocity, viscoelastic, tsuji");
+  return k + 2;
+}
+
+// `tangential <model> <coefficients>` at a[k]; returns the index after it. `kt_null` says
+// whether mindlin's stiffness was given as NULL (derived from E and nu once all is read).
+size_t parse_granular_tangential(const std::vector<std::string>& a, size_t k,
+                                 const std::string& where, GranularPair& p, bool& kt_null) {
+  auto need = [&](size_t n, const std::string& what) {
+    if (k + n >= a.size()) throw InputError(where + ": '" + a[k] + "' needs " + what);
+  };
+  const std::string& t = a[k + 1];
+  if (t == "linear_nohistory") {
+    need(3, "x_gammat and mu");
+    p.tangential = GranularPair::LinearNoHistory;
+    p.kt = 0, p.xgt = number(where, a[k + 2]), p.mu = number(where, a[k + 3]);
+    return k + 4;
+  }
+  if (t == "linear_history" || t == "mindlin") {
+    need(4, "kt (mindlin: or NULL), x_gammat and mu");
+    p.tangential = t == "mindlin" ? GranularPair::Mindlin : GranularPair::LinearHistory;
+    kt_null = t == "mindlin" && a[k + 2] == "NULL";
+    p.kt = kt_null ? 0 : number(where, a[k + 2]);
+    p.xgt = number(where, a[k + 3]), p.mu = number(where, a[k + 4]);
+    return k + 5;
+  }
+  throw InputError(where + ": tangential model '" + t +
+                   "' is not supported (supported: "
+                   "linear_nohistory, linear_history, mindlin)");
+}
+
 GranularPair parse_granular_coeff(const std::vector<std::string>& a, size_t k,
                                   const std::string& where) {
   GranularPair p;
@@ -110,40 +156,10 @@ GranularPair parse_granular_coeff(const std::vector<std::string>& a, size_t k,
       normal = true, k += 4;
     } else if (w == "damping") {
       need(1, "velocity, mass_velocity, viscoelastic or tsuji");
-      const std::string& d = a[k + 1];
-      if (d == "velocity")
-        p.damping = GranularPair::Velocity;
-      else if (d == "mass_velocity")
-        p.damping = GranularPair::MassVelocity;
-      else if (d == "viscoelastic")
-        p.damping = GranularPair::Viscoelastic;
-      else if (d == "tsuji")
-        p.damping = GranularPair::Tsuji;
-      else
-        throw InputError(where + ": damping model '" + d +
-                         "' is not one of velocity, "
-                         "mass_velocity, viscoelastic, tsuji");
-      k += 2;
+      k = parse_granular_damping(a, k, where, p);
     } else if (w == "tangential") {
       need(1, "a tangential model");
-      const std::string& t = a[k + 1];
-      if (t == "linear_nohistory") {
-        need(3, "x_gammat and mu");
-        p.tangential = GranularPair::LinearNoHistory;
-        p.kt = 0, p.xgt = number(where, a[k + 2]), p.mu = number(where, a[k + 3]);
-        k += 4;
-      } else if (t == "linear_history" || t == "mindlin") {
-        need(4, "kt (mindlin: or NULL), x_gammat and mu");
-        p.tangential = t == "mindlin" ? GranularPair::Mindlin : GranularPair::LinearHistory;
-        kt_null = t == "mindlin" && a[k + 2] == "NULL";
-        p.kt = kt_null ? 0 : number(where, a[k + 2]);
-        p.xgt = number(where, a[k + 3]), p.mu = number(where, a[k + 4]);
-        k += 5;
-      } else {
-        throw InputError(where + ": tangential model '" + t +
-                         "' is not supported (supported: "
-                         "linear_nohistory, linear_history, mindlin)");
-      }
+      k = parse_granular_tangential(a, k, where, p, kt_null);
       tangential = true;
     } else if (w == "limit_damping") {
       p.limit_damping = true, ++k;
