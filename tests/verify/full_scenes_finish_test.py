@@ -9,6 +9,7 @@ writes a summary whose run record says `complete`, or exits 1):
 
     full_scenes_finish_test.py"""
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -78,6 +79,9 @@ def main():
         # a scene that did not end is not written.
         (tmp / "hold").write_text("")
         record.unlink()
+        # The first run's pid file would be read before the runner clears the folder for its
+        # new run: remove it, so that the pid read below is the running engine's.
+        shutil.rmtree(work / "continuum_fit")
         runner = subprocess.Popen([sys.executable, str(RUNNER), str(engine), "--scenes",
                                    "continuum_fit", "--threads", "1", "--work", str(work),
                                    "--record", str(record)], stdout=subprocess.DEVNULL,
