@@ -4,6 +4,7 @@
 //
 //   bench_dem_energy_vs_dt --kokkos-threads=2 [--n 4096] [--periods 100] [--cache DIR]
 //                          [--fractions 0.005,0.01,...] [--out perf/results/dem_energy_vs_dt.json]
+//                          [--precision double,mixed]
 //
 // The time step is given as a fraction of t_c = pi sqrt(m_red / k_n), the contact duration
 // of the lightest pair (two smallest spheres). Each run starts from the same state (the
@@ -14,6 +15,9 @@
 // where the energy grows without bound; the engine's guards (non-finite energy, runaway
 // overlap or energy) then stop the run and the row is recorded as "unstable".
 // The engine's own time-step guard (dt <= t_c/10) is lifted here, since the scan goes past it.
+// --precision double,mixed: a row per precision and time step, both on the two-pass kernel
+// (DemParams::mixed_precision reads fixed-point positions in the force pass,
+// docs/mixed_precision.md); the default, double alone, runs the host's one-pass kernel.
 #include <Kokkos_Core.hpp>
 #include <algorithm>
 #include <cmath>
@@ -114,6 +118,7 @@ struct Options {
   double v_sigma = 5e-5;     // mm/us = 0.05 m/s per component, as in the peer packings
   int samples_target = 200;  // energy samples per run
   std::string cache_dir = "perf_cache", out = "perf/results/dem_energy_vs_dt.json";
+  std::string precisions = "double";
   std::string fractions =
       "0.005,0.01,0.02,0.03,0.05,0.07,0.1,0.14,0.2,0.25,0.3,0.35,0.4,0.45,0.5,0.55,0.6,0.65,"
       "0.7,0.8";
@@ -138,6 +143,8 @@ bool parse_options(int argc, char** argv, Options& o) {
       o.cache_dir = next();
     else if (a == "--out")
       o.out = next();
+    else if (a == "--precision")
+      o.precisions = next();
     else if (a == "--samples")
       o.samples_target = std::stoi(next());
     else if (a.rfind("--kokkos", 0) != 0) {
@@ -276,9 +283,12 @@ EnergyRun integrate(const HostParticles& host, const PeriodicBox& box, const Dem
 }
 
 // The row of a run (and its line on stdout).
-Json row_json(const EnergyRun& r, double f, double dt, int n, double tc) {
+Json row_json(const EnergyRun& r, double f, const DemParams& prm, int n, double tc) {
+  const double dt = prm.dt;
   Json row = Json::object();
   row["fraction"] = f;
+  row["precision"] = prm.mixed_precision ? "mixed" : "double";
+  row["force_kernel"] = prm.two_pass_forces ? "two-pass" : "default";
   row["dt_us"] = dt;
   row["steps"] = r.steps;
   row["status"] = r.status;
@@ -299,8 +309,9 @@ Json row_json(const EnergyRun& r, double f, double dt, int n, double tc) {
   }
   row["time_in_tc"] = r.t_s;
   row["relative_energy_error"] = r.e_s;
-  std::cout << "dt/t_c " << f << ": " << r.status << ", max |dE|/E " << r.max_err << ", " << r.done
-            << "/" << r.steps << " steps, " << r.wall << " s";
+  std::cout << (prm.mixed_precision ? "mixed " : "") << "dt/t_c " << f << ": " << r.status
+            << ", max |dE|/E " << r.max_err << ", " << r.done << "/" << r.steps << " steps, "
+            << r.wall << " s";
   if (r.done > 0) std::cout << ", " << r.wall / (r.done * dt) * tc << " s per t_c";
   std::cout << "\n";
   return row;
@@ -309,16 +320,30 @@ Json row_json(const EnergyRun& r, double f, double dt, int n, double tc) {
 // A row per time-step fraction, each run from the same initial state.
 Json run_fractions(const Options& o, const HostParticles& host, const PeriodicBox& box, double tc) {
   Json rows = Json::array();
-  for (const double f : parse_list(o.fractions)) {
-    DemParams prm = perf::bench_params();
-    prm.dt = f * tc;
-    prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose
-    prm.max_overlap = 0.5;  // runaway-overlap guard, as in the scenes
-    const long steps = std::max(1L, std::lround(o.periods / f));
-    const long every = std::max(1L, steps / o.samples_target);
-    const EnergyRun r = integrate(host, box, prm, steps, every, tc);
-    rows.push(row_json(r, f, prm.dt, host.size(), tc));
+  std::vector<std::string> precisions;
+  {
+    std::stringstream ss(o.precisions);
+    std::string p;
+    while (std::getline(ss, p, ',')) {
+      if (p != "double" && p != "mixed")
+        throw std::runtime_error("--precision takes double and/or mixed, not " + p);
+      precisions.push_back(p);
+    }
   }
+  const bool compared = o.precisions != "double";
+  for (const std::string& precision : precisions)
+    for (const double f : parse_list(o.fractions)) {
+      DemParams prm = perf::bench_params();
+      prm.dt = f * tc;
+      prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose
+      prm.max_overlap = 0.5;  // runaway-overlap guard, as in the scenes
+      prm.two_pass_forces = compared;
+      prm.mixed_precision = precision == "mixed";
+      const long steps = std::max(1L, std::lround(o.periods / f));
+      const long every = std::max(1L, steps / o.samples_target);
+      const EnergyRun r = integrate(host, box, prm, steps, every, tc);
+      rows.push(row_json(r, f, prm, host.size(), tc));
+    }
   return rows;
 }
 

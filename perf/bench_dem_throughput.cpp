@@ -9,7 +9,7 @@
 //                        [--alternate batch|near|stream|skin|rows|pack [--block B]]
 //                        [--skin-b S] [--zero-rows] [--no-pack] [--pack-min N]
 //                        [--thread-per-particle] [--slabs S] [--block-rows R]
-//                        [--tile NX,NY,NZ] [--no-memory] [--walls]
+//                        [--tile NX,NY,NZ] [--no-memory] [--walls] [--two-pass] [--mixed]
 // --no-batch evaluates frictional contacts one by one instead of in AVX batches
 // (DemParams::batched_contacts; the same bits, for before/after figures from one binary).
 // --near-skin S: the force pass's near list (DemParams::near_skin: < 0, the default, a 32nd of
@@ -40,6 +40,9 @@
 // --walls: the box's z faces are planar walls with the pair's own law (a wall of infinite radius
 // and mass, as LAMMPS' fix wall/gran): the peer comparison's walled box (perf/peer/walls.lmp
 // makes its packing from the periodic one).
+// --two-pass: host backends run the device's two-pass force kernel (DemParams::two_pass_forces).
+// --mixed: the force pass reads fixed-point positions (DemParams::mixed_precision, which runs the
+// two-pass kernel; docs/mixed_precision.md). Rows record their "precision" and "force_kernel".
 // --no-triad skips the bandwidth measurements, triad and copy (their 768 MiB of arrays would
 // also dominate the peak resident memory that every row records).
 // The physics options are the cost of each model switch on the same packing:
@@ -174,7 +177,9 @@ struct BenchOptions {
   int pack_min = DemParams{}.packed_stream_min_particles;
   long steps = 2000, warmup = 500;
   std::vector<int> tile{1, 1, 1};
-  bool track_memory = true, walls = false;
+  bool track_memory = true, walls = false, two_pass = false, mixed = false;
+  // Whether the force pass is the two-pass kernel (devices, or asked for on a host).
+  bool rows_kernel() const { return two_pass || mixed || !forces_by_slabs<Exec>(); }
 };
 
 // Sets the option `a` when it is one that takes no value; false when it is not.
@@ -193,6 +198,10 @@ bool parse_switch(const std::string& a, BenchOptions& o) {
     o.track_memory = false;
   else if (a == "--walls")
     o.walls = true;
+  else if (a == "--two-pass")
+    o.two_pass = true;
+  else if (a == "--mixed")
+    o.mixed = true;
   else
     return false;
   return true;
@@ -303,7 +312,7 @@ Json result_header(const BenchOptions& o, const BenchContext& c) {
   result["packed_stream_min_particles"] = o.pack_min;
   result["force_slabs"] = o.slabs == 0 ? Json("automatic") : Json(o.slabs);
   result["cell_block_rows"] = o.block_rows;
-  if (!forces_by_slabs<Exec>())
+  if (o.rows_kernel())
     result["contacts_pass"] = o.per_particle ? "thread per particle" : "thread per contact";
   return result;
 }
@@ -353,6 +362,8 @@ DemParams dem_params(const BenchOptions& o, const std::string& phys) {
   prm.packed_stream = o.packed;
   prm.packed_stream_min_particles = o.pack_min;
   prm.force_slabs = o.slabs, prm.cell_block_rows = o.block_rows;
+  prm.two_pass_forces = o.two_pass;
+  prm.mixed_precision = o.mixed;
   // The time-step guard takes a Hertz contact's stiffness at the largest overlap the
   // run allows: at the benchmark's bound (a whole radius) the deck's dt would be
   // refused. A fifth of the smallest radius is forty times the packing's overlaps.
@@ -524,8 +535,9 @@ double slab_force_bytes(const StepShape& s) {
 // owned rows read, per other entry the partner's row index and the row, then v, w read
 // and f, torque written. Flagged rows: each entry's row becomes its byte, and only
 // the touching contacts' rows are written and read (z_end/2 per particle on each
-// side of a contact).
-double contacts_pass_force_bytes(const StepShape& s, bool flags, bool per_particle) {
+// side of a contact). Mixed precision: positions are read as 12 bytes of integers (the owner's
+// and each owned entry's partner's), written by a pass that reads the 24 of the doubles.
+double contacts_pass_force_bytes(const StepShape& s, bool flags, bool per_particle, bool mixed) {
   const double H = s.H, R = s.R, nb = s.nb, owned = s.owned, contacts = s.contacts;
   const double row = 8 * (3 + 6 * R);
   // (The owner's state and offsets, read again by each of its contacts' threads,
@@ -533,9 +545,11 @@ double contacts_pass_force_bytes(const StepShape& s, bool flags, bool per_partic
   const double owner = s.body_i + 8 + (per_particle ? 0.0 : owned * 4);
   const double entry_row = flags ? 1.0 : row;  // per entry, touching or not
   const double touch_row = flags ? row : 0.0;  // per touching contact, each side
-  return owner + owned * (4 + 24 + 8 + 8 * H + entry_row) +
+  const double pos = mixed ? 12 : 24;          // bytes of one position as the pass reads it
+  const double fixed_update = mixed ? 24 + 12 : 0;
+  return owner - (24 - pos) + owned * (4 + pos + 8 + 8 * H + entry_row) +
          contacts * (s.body_j_rest + 8 * H + touch_row) + (24 + 24 * R) + 16 + owned * entry_row +
-         (nb - owned) * (4 + entry_row) + 2 * contacts * touch_row + 24 * (1 + R);
+         (nb - owned) * (4 + entry_row) + 2 * contacts * touch_row + 24 * (1 + R) + fixed_update;
 }
 
 // Fused kick-drift (x, v, f, w, torque, mass, inertia, reference x read; x, v, w
@@ -568,9 +582,9 @@ Traffic traffic_model(const BenchOptions& o, const RowMeasures& rm, int n) {
   t.nb = s.nb;
   // DemSystem flags apart rows only for laws with rotations (DemParams::flag_apart_rows).
   t.flags = o.flagged && Model::rotations;
-  const double force_bytes = forces_by_slabs<Exec>()
-                                 ? slab_force_bytes(s)
-                                 : contacts_pass_force_bytes(s, t.flags, o.per_particle);
+  const double force_bytes = o.rows_kernel()
+                                 ? contacts_pass_force_bytes(s, t.flags, o.per_particle, o.mixed)
+                                 : slab_force_bytes(s);
   t.bytes = force_bytes + integrate_bytes(s, rm.packed_reads);
   // The least a step must move (docs/gpu_memory.md): each particle's state read once
   // and written once (mass and inertia follow from the radius), force and torque
@@ -625,7 +639,9 @@ void add_step_fields(Json& row, const BenchOptions& o, const RowResult& r) {
   row["near_list_recordings_in_timed_window"] = m.near_recordings;
   row["near_list_reads_in_timed_window"] = m.near_reads;
   row["packed_record_reads_in_timed_window"] = m.packed_reads;
-  if (forces_by_slabs<Exec>())
+  row["precision"] = o.mixed ? "mixed (fixed-point positions)" : "double";
+  row["force_kernel"] = o.rows_kernel() ? "two-pass" : "one-pass slabs";
+  if (!o.rows_kernel())
     row["force_slabs"] = m.slabs_used;
   else
     row["flag_apart_rows"] = r.t.flags;

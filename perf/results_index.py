@@ -23,6 +23,7 @@ GROUPS = [  # (title, pattern on the file name), first match wins
     ("Flatness of the force pass", r"^flatness"),
     ("MPI ensembles", r"^mpi_"),
     ("Energy drift against the time step", r"^dem_energy_vs_dt"),
+    ("Mixed precision: accuracy, speed and memory", r"^mixed_precision"),
     ("Other", r""),
 ]
 

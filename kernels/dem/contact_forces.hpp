@@ -12,6 +12,7 @@
 #include "kernels/cpu/contact_batch.hpp"
 #include "kernels/cpu/host_rows.hpp"
 #include "kernels/cpu/near_stream.hpp"
+#include "kernels/dem/fixed_point.hpp"
 #include "kernels/dem/neighbor_list.hpp"
 
 namespace granular {
@@ -105,6 +106,56 @@ struct ParticleViews {
   explicit ParticleViews(const Particles<ExecSpace>& p)
       : x(p.x), v(p.v), w(p.w), radius(p.radius), mass(p.mass), species(p.species), id(p.id) {}
 };
+
+// The mixed-precision force pass's view of the particles (DemParams::mixed_precision,
+// kernels/dem/fixed_point.hpp): positions read as fixed-point integers, everything else as in
+// ParticleViews. Its load_body and touching below are picked over the generic ones by overload
+// resolution, so the kernels that take their views as a template parameter are written once.
+template <class ExecSpace>
+struct FixedPointViews : ParticleViews<ExecSpace> {
+  typename FixedPositions<ExecSpace>::view q;
+  double step[3];
+  FixedPointViews(const Particles<ExecSpace>& p, const FixedPositions<ExecSpace>& fixed)
+      : ParticleViews<ExecSpace>(p), q(fixed.q) {
+    for (int d = 0; d < 3; ++d) step[d] = fixed.step[d];
+  }
+};
+
+// A body whose position is its integers (x is left unset: the pair's geometry uses only the
+// separation).
+struct FixedBody : Body {
+  std::uint32_t q[3];
+};
+
+template <class ExecSpace>
+KOKKOS_FORCEINLINE_FUNCTION FixedBody load_body(const FixedPointViews<ExecSpace>& v, int i,
+                                                bool rotations) {
+  FixedBody b;
+  for (int d = 0; d < 3; ++d) {
+    b.x[d] = 0.0;
+    b.q[d] = v.q(i, d);
+    b.v[d] = v.v(i, d);
+    b.w[d] = rotations ? v.w(i, d) : 0.0;
+  }
+  b.a = v.radius(i);
+  b.m = v.mass(i);
+  b.s = v.species(i);
+  return b;
+}
+
+// touching() with the separation from the integers: the wrap-around is the minimum image (a
+// walled dimension's listed pairs are never half a box apart, DemSystem checks the lengths).
+template <class ExecSpace>
+KOKKOS_FORCEINLINE_FUNCTION bool touching(const FixedPointViews<ExecSpace>& v, const PeriodicBox&,
+                                          const FixedBody& bi, int j, double& rx, double& ry,
+                                          double& rz, double& r2) {
+  rx = fixed_point_separation(bi.q[0], v.q(j, 0), v.step[0]);
+  ry = fixed_point_separation(bi.q[1], v.q(j, 1), v.step[1]);
+  rz = fixed_point_separation(bi.q[2], v.q(j, 2), v.step[2]);
+  const double sum = bi.a + v.radius(j);
+  r2 = rx * rx + ry * ry + rz * rz;
+  return r2 < sum * sum;
+}
 
 // Extension point of the pair pass for laws that need more than the pair (multi-contact,
 // kernels/dem/multicontact.hpp): a hook may replace the model's evaluation of a touching contact
@@ -264,9 +315,9 @@ void gather_pair_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSp
 // rows are flagged (`flagged`), marks its byte of `flags` 0 and leaves its row unwritten:
 // about 40 % of the listed pairs of a dense packing are apart, and their zero rows were
 // written by this pass and read back by the gather.
-template <class Model, class PV, class HistoryView, class PairView, class FlagView>
+template <class Model, class PV, class B, class HistoryView, class PairView, class FlagView>
 KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, const Model& m,
-                                        const Body& bi, const int j, const int r,
+                                        const B& bi, const int j, const int r,
                                         const HistoryView& history, const PairView& pair,
                                         const FlagView& flags, const bool flagged,
                                         const double r3[3], const double dt) {
@@ -309,12 +360,14 @@ KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, cons
 // `thread_per_particle`: the earlier mapping (each owner loops over its contacts), kept to
 // measure the difference; both evaluate every contact with the same arithmetic, so the
 // results are the same bit for bit.
-template <class ExecSpace, class Model, class HistoryView, class PairView>
-void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
-                          const HistoryView& history, const PairView& pair, const PeriodicBox& box,
-                          const Model& model, const double strain_rate[3], double dt,
-                          bool thread_per_particle, const RowFlags<ExecSpace>& flags = {}) {
-  const ParticleViews<ExecSpace> pv(p);
+// `pv`: ParticleViews, or FixedPointViews for the mixed-precision pass.
+template <class ExecSpace, class Model, class PV, class HistoryView, class PairView>
+void contact_rows_with(const PV& views, const Particles<ExecSpace>& p,
+                       const NeighborList<ExecSpace>& nl, const HistoryView& history,
+                       const PairView& pair, const PeriodicBox& box, const Model& model,
+                       const double strain_rate[3], double dt, bool thread_per_particle,
+                       const RowFlags<ExecSpace>& flags) {
+  const PV pv = views;
   auto offsets = nl.offsets(), neighbors = nl.neighbors();
   auto owned_end = nl.owned_end(), pair_begin = nl.pair_begin(), pair_owner = nl.pair_owner();
   const PeriodicBox b = box;
@@ -326,7 +379,7 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
         "dem::compute_forces::contacts_by_particle", Kokkos::RangePolicy<ExecSpace>(0, p.n),
         KOKKOS_LAMBDA(const int i) {
           const double r3[3] = {rate[0], rate[1], rate[2]};
-          const Body bi = load_body(pv, i, Model::rotations);
+          const auto bi = load_body(pv, i, Model::rotations);
           const int row0 = pair_begin(i) - offsets(i);
           for (int k = offsets(i); k < owned_end(i); ++k)
             contact_row(pv, b, m, bi, neighbors(k), row0 + k, history, pair, flags, flagged, r3,
@@ -343,6 +396,21 @@ void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<Exec
         contact_row(pv, b, m, load_body(pv, i, Model::rotations), neighbors(k), r, history, pair,
                     flags, flagged, r3, dt);
       });
+}
+
+// `fixed` (mixed precision): the positions as fixed-point integers, refreshed for this pass.
+template <class ExecSpace, class Model, class HistoryView, class PairView>
+void compute_contact_rows(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
+                          const HistoryView& history, const PairView& pair, const PeriodicBox& box,
+                          const Model& model, const double strain_rate[3], double dt,
+                          bool thread_per_particle, const RowFlags<ExecSpace>& flags = {},
+                          const FixedPositions<ExecSpace>* fixed = nullptr) {
+  if (fixed)
+    contact_rows_with(FixedPointViews<ExecSpace>(p, *fixed), p, nl, history, pair, box, model,
+                      strain_rate, dt, thread_per_particle, flags);
+  else
+    contact_rows_with(ParticleViews<ExecSpace>(p), p, nl, history, pair, box, model, strain_rate,
+                      dt, thread_per_particle, flags);
 }
 
 // A stretch of an owner row for the host kernel, split into its touching entries (list
@@ -864,8 +932,9 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
                     const Model& model, const Damping& damping, const double strain_rate[3],
                     double dt, bool two_pass, const NearRows& near, NearMode near_mode,
                     bool batched = true, bool thread_per_particle = false, bool started = false,
-                    const RowFlags<ExecSpace>& flags = {}) {
-  if (!two_pass) {
+                    const RowFlags<ExecSpace>& flags = {},
+                    const FixedPositions<ExecSpace>* fixed = nullptr) {
+  if (!two_pass && !fixed) {
     if constexpr (forces_by_slabs<ExecSpace>()) {
       compute_forces_by_slabs(p, nl, history, box, model, damping, strain_rate, dt, near, near_mode,
                               batched, started);
@@ -873,7 +942,7 @@ void compute_forces(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>
     }
   }
   compute_contact_rows(p, nl, history, pair, box, model, strain_rate, dt, thread_per_particle,
-                       flags);
+                       flags, fixed);
   gather_contact_forces<ExecSpace, Model>(p, nl, pair, damping, nl.pair_begin(), nl.pair_row(),
                                           "dem::compute_forces::gather_rows", flags);
 }

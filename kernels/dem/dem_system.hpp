@@ -77,6 +77,13 @@ struct DemParams {
   // (docs/perf_design_notes.md, CPUs).
   bool packed_stream = true;
   int packed_stream_min_particles = 65536;
+  // Mixed precision (docs/mixed_precision.md): the force pass reads the positions as 32-bit
+  // fixed-point fractions of the box (kernels/dem/fixed_point.hpp), refreshed from the double
+  // positions before each pass; forces, torques, histories and their sums stay in double, and
+  // so do the integration and the measurements. Runs the two-pass kernel on every backend;
+  // classical laws only (not with multi-contact laws). Off by default: the results then are
+  // those of double precision bit for bit.
+  bool mixed_precision = false;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -205,6 +212,10 @@ class DemSystem {
         throw InputError("particle species " + std::to_string(species(i)) + " out of range");
       used[species(i)] = true;
     }
+    if (params_.mixed_precision && mc.mode != MultiContact::None)
+      throw InputError(
+          "mixed precision covers the classical contact laws only: switch it off "
+          "(DemParams::mixed_precision) to run a multi-contact law");
     mc.validate(used);
     // Multi-contact laws act between the two passes, which need the per-contact forces.
     size_pair_buffer(two_pass() || mc.mode != MultiContact::None, mc.mode != MultiContact::None);
@@ -447,6 +458,7 @@ class DemSystem {
       }
     }
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
+    if (params_.mixed_precision) check_fixed_point_box();
     nl_.set_partition(params_.force_slabs, params_.cell_block_rows);
     nl_.keep_mirror(false);  // the indices the first build makes (size_pair_buffer)
     nl_.keep_pair_index(two_pass());
@@ -454,10 +466,24 @@ class DemSystem {
   }
   static constexpr bool kRot = Model::rotations;
 
+  // The fixed-point separation takes the minimum image by integer wrap-around, so a listed
+  // pair must be less than half a box length apart in every dimension, walled ones included.
+  void check_fixed_point_box() const {
+    const double reach = 2 * a_max_ + params_.skin;
+    for (int d = 0; d < 3; ++d)
+      if (!(box_.len[d] > 2 * reach))
+        throw InputError(
+            "mixed precision needs every box length above twice the neighbour "
+            "reach (2 a_max + skin = " +
+            std::to_string(reach) + "); dimension " + std::to_string(d) + " is " +
+            std::to_string(box_.len[d]) + ": switch mixed_precision off");
+  }
+
   // The per-contact force array of the two-pass kernel: allocated only where that kernel
   // runs (devices, multi-contact laws, or on request), since it is ~40 % of the memory.
   bool two_pass() const {
-    return params_.two_pass_forces || mc_.active() || !forces_by_slabs<ExecSpace>();
+    return params_.two_pass_forces || params_.mixed_precision || mc_.active() ||
+           !forces_by_slabs<ExecSpace>();
   }
   // Multi-contact laws index it by list entry (both sides of a contact read their entries)
   // through the list's mirror; the classical laws by pair row (half the rows) through the
@@ -586,6 +612,7 @@ class DemSystem {
   // where the pass takes the frictional stream.
   void forces(double dt, bool started = false, NearMode near = NearMode::Record,
               bool tracked = false, const double* pack = nullptr) {
+    if (params_.mixed_precision) fixed_.update(p_, box_);
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
                   wall_history_, wall_record_, wall_touch_, params_.gravity, external_,
@@ -597,7 +624,8 @@ class DemSystem {
     compute_forces(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt,
                    two_pass(), rows, near, params_.batched_contacts,
                    params_.contact_thread_per_particle, started,
-                   params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>());
+                   params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>(),
+                   params_.mixed_precision ? &fixed_ : nullptr);
     if (external_)
       add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_,
                           wall_touch_, model_, params_.gravity, dt);
@@ -791,6 +819,7 @@ class DemSystem {
   NearStream near_stream_;        // and their stream (kernels/cpu/near_stream.hpp)
   using pack_view = Kokkos::View<double*, Kokkos::HostSpace>;
   pack_view pack_;  // the particles' packed records for the stream (packed_records())
+  FixedPositions<ExecSpace> fixed_;  // the force pass's positions (mixed precision)
   NearListUse near_use_;
 };
 

@@ -87,7 +87,7 @@ py::dict moduli(const Moduli& m) {
 
 DemParams dem_params(double dt, double skin, double damping, double rotational_damping,
                      int rattler_threshold, double max_overlap,
-                     const std::array<double, 3>& gravity) {
+                     const std::array<double, 3>& gravity, const std::string& precision) {
   DemParams p;
   p.dt = dt;
   p.skin = skin;
@@ -99,6 +99,12 @@ DemParams dem_params(double dt, double skin, double damping, double rotational_d
   p.rattler_threshold = rattler_threshold;
   p.max_overlap = max_overlap;
   for (int d = 0; d < 3; ++d) p.gravity[d] = gravity[d];
+  if (precision != "double" && precision != "mixed")
+    throw InputError(
+        "precision must be \"double\" or \"mixed\" (fixed-point positions in the "
+        "force pass, docs/mixed_precision.md), not \"" +
+        precision + "\"");
+  p.mixed_precision = precision == "mixed";
   return p;
 }
 
@@ -278,38 +284,43 @@ void bind_factories(py::module_& m) {
       .def_static("read", &read_config, py::arg("path"));
 
   auto make = [](auto build, double dt, double skin, double damping, double rotational_damping,
-                 int rattler_threshold, double max_overlap, std::array<double, 3> gravity) {
+                 int rattler_threshold, double max_overlap, std::array<double, 3> gravity,
+                 const std::string& precision) {
     ensure_kokkos();
-    const DemParams p =
-        dem_params(dt, skin, damping, rotational_damping, rattler_threshold, max_overlap, gravity);
+    const DemParams p = dem_params(dt, skin, damping, rotational_damping, rattler_threshold,
+                                   max_overlap, gravity, precision);
     return build(p);
   };
   m.def(
       "make_simulation",
       [make](const Packing& packing, const std::string& contact, const std::string& source,
              double dt, double skin, double damping, double rotational_damping,
-             int rattler_threshold, double max_overlap, std::array<double, 3> gravity) {
+             int rattler_threshold, double max_overlap, std::array<double, 3> gravity,
+             const std::string& precision) {
         return make(
             [&](const DemParams& p) { return api::make_simulation(packing, contact, source, p); },
-            dt, skin, damping, rotational_damping, rattler_threshold, max_overlap, gravity);
+            dt, skin, damping, rotational_damping, rattler_threshold, max_overlap, gravity,
+            precision);
       },
       py::arg("packing"), py::arg("contact"), py::arg("source"), py::arg("dt"), py::arg("skin"),
       py::arg("damping") = 0.0, py::arg("rotational_damping") = 0.0,
       py::arg("rattler_threshold") = 3, py::arg("max_overlap") = 0.3,
-      py::arg("gravity") = std::array<double, 3>{0, 0, 0});
+      py::arg("gravity") = std::array<double, 3>{0, 0, 0}, py::arg("precision") = "double");
   m.def(
       "restore_simulation",
       [make](const ConfigState& state, const std::string& contact, const std::string& source,
              double dt, double skin, double damping, double rotational_damping,
-             int rattler_threshold, double max_overlap, std::array<double, 3> gravity) {
+             int rattler_threshold, double max_overlap, std::array<double, 3> gravity,
+             const std::string& precision) {
         return make(
             [&](const DemParams& p) { return api::restore_simulation(state, contact, source, p); },
-            dt, skin, damping, rotational_damping, rattler_threshold, max_overlap, gravity);
+            dt, skin, damping, rotational_damping, rattler_threshold, max_overlap, gravity,
+            precision);
       },
       py::arg("state"), py::arg("contact"), py::arg("source"), py::arg("dt"), py::arg("skin"),
       py::arg("damping") = 0.0, py::arg("rotational_damping") = 0.0,
       py::arg("rattler_threshold") = 3, py::arg("max_overlap") = 0.3,
-      py::arg("gravity") = std::array<double, 3>{0, 0, 0});
+      py::arg("gravity") = std::array<double, 3>{0, 0, 0}, py::arg("precision") = "double");
 }
 
 using release = py::call_guard<py::gil_scoped_release>;

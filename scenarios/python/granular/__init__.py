@@ -139,18 +139,21 @@ class System:
     dt, skin:  time step (us) and neighbour-list skin (mm). A time step too large for the
                stiffest contact is refused, saying which value to lower.
     damping, rotational_damping: background damping rates (1/us).
+    precision: "double" (default) or "mixed": the force pass reads the positions as 32-bit
+               fixed-point fractions of the box, forces stay in double (docs/mixed_precision.md;
+               classical contact laws only).
     Keys are checked as in a scene file: a misspelt one is refused, named.
     """
 
     def __init__(self, packing, contact=None, materials=None, dt=None, skin=None,
                  damping=0.0, rotational_damping=0.0, rattler_threshold=3, max_overlap=0.3,
-                 gravity=(0.0, 0.0, 0.0), _sim=None):
+                 gravity=(0.0, 0.0, 0.0), precision="double", _sim=None):
         if _sim is not None:
             self._sim = _sim
             return
         self._sim = _simulation(_granular.make_simulation, packing, contact, materials, dt, skin,
                                 damping, rotational_damping, rattler_threshold, max_overlap,
-                                gravity)
+                                gravity, precision)
 
     # --- stepping ------------------------------------------------------------------------
     def step(self, n=1):
@@ -287,18 +290,18 @@ class System:
     @classmethod
     def from_saved(cls, state, contact=None, materials=None, dt=None, skin=None, damping=0.0,
                    rotational_damping=0.0, rattler_threshold=3, max_overlap=0.3,
-                   gravity=(0.0, 0.0, 0.0)):
+                   gravity=(0.0, 0.0, 0.0), precision="double"):
         """A System continuing a saved state (SavedState or a path) under a contact law, with
         the settings of System()."""
         if not isinstance(state, SavedState):
             state = read_saved_state(state)
         return cls(None, _sim=_simulation(_granular.restore_simulation, state, contact,
                                           materials, dt, skin, damping, rotational_damping,
-                                          rattler_threshold, max_overlap, gravity))
+                                          rattler_threshold, max_overlap, gravity, precision))
 
 
 def _simulation(factory, start, contact, materials, dt, skin, damping, rotational_damping,
-                rattler_threshold, max_overlap, gravity):
+                rattler_threshold, max_overlap, gravity, precision="double"):
     """The compiled simulation of a packing or a saved state (factory: make_simulation or
     restore_simulation) under the contact law of `contact` and `materials`."""
     if dt is None or skin is None:
@@ -313,7 +316,7 @@ def _simulation(factory, start, contact, materials, dt, skin, damping, rotationa
     initialize()
     return factory(start, toml_text(tables), "<System contact>", float(dt), float(skin),
                    float(damping), float(rotational_damping), int(rattler_threshold),
-                   float(max_overlap), tuple(float(g) for g in gravity))
+                   float(max_overlap), tuple(float(g) for g in gravity), str(precision))
 
 
 def scenes():

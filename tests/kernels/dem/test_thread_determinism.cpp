@@ -49,7 +49,7 @@ int threads_of() {
 }
 
 template <class Exec, class Model>
-Trace run_short_compression(const Model& model, int count, long steps) {
+Trace run_short_compression(const Model& model, int count, long steps, bool mixed = false) {
   GasSpec g;
   g.count = count, g.diameter_min = 1, g.diameter_max = 3, g.density = 2000, g.phi = 0.45;
   g.speed = 0.01, g.seed = 3;
@@ -58,6 +58,7 @@ Trace run_short_compression(const Model& model, int count, long steps) {
   DemParams prm;
   prm.dt = 0.004, prm.skin = 0.2, prm.damping.translational = 100;
   prm.damping.rotational = 20;
+  prm.mixed_precision = mixed;
   DemSystem<Exec, Model> sys(Particles<Exec>::from_host(h), box, model, prm);
   Trace t;
   t.concurrency = threads_of<Exec>();
@@ -202,9 +203,9 @@ void expect_independent_of_threads(const Run& run, bool rotations, int* slabs = 
 
 template <class Model>
 void expect_thread_count_independent(const Model& model, int count = 400, long steps = 2500,
-                                     int* slabs = nullptr) {
+                                     int* slabs = nullptr, bool mixed = false) {
   expect_independent_of_threads(
-      [&](auto exec) { return run_short_compression<decltype(exec)>(model, count, steps); },
+      [&](auto exec) { return run_short_compression<decltype(exec)>(model, count, steps, mixed); },
       Model::rotations, slabs);
 }
 
@@ -243,6 +244,15 @@ TEST(ThreadDeterminism, HertzMindlinHistoryIsThreadCountIndependent) {
             CoulombTangential::uniform(2 * Gp / (2 - nu), 20, 0.5, 0.5,
                                        CoulombTangential::MindlinPairDiameter),
             {}});
+}
+
+// The mixed-precision force pass (fixed-point positions, DemParams::mixed_precision) keeps
+// the two-pass kernel's order of summation, through a box whose lengths change every step.
+TEST(ThreadDeterminism, MixedPrecisionFrictionalHistoryIsThreadCountIndependent) {
+  using Model = ContactModel<LinearNormal, CoulombTangential>;
+  expect_thread_count_independent(
+      Model{LinearNormal::uniform(1e5, 1000), CoulombTangential::uniform(8e4, 200, 0.5, 0.4), {}},
+      400, 2500, nullptr, true);
 }
 
 // Enough particles for several slabs per round of the host force kernel, so that threads
