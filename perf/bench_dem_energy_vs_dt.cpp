@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "command_line.hpp"
 #include "core/io/output.hpp"
 #include "core/run/error.hpp"
 #include "core/run/rng.hpp"
@@ -104,14 +105,6 @@ NetworkFrequency network_frequency(const HostParticles& h, const PeriodicBox& bo
   return out;
 }
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
-  return out;
-}
-
 struct Options {
   int n = 4096;
   double periods = 100;      // simulated time in units of t_c
@@ -127,32 +120,25 @@ struct Options {
 // The options in order; a malformed value throws. Returns false on an unknown option (named
 // on stderr); Kokkos' own options are left to Kokkos.
 bool parse_options(int argc, char** argv, Options& o) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-      return argv[++i];
-    };
+  return perf::read_options(argc, argv, [&](const std::string& a, const auto& value) {
     if (a == "--n")
-      o.n = std::stoi(next());
+      o.n = std::stoi(value());
     else if (a == "--periods")
-      o.periods = std::stod(next());
+      o.periods = std::stod(value());
     else if (a == "--fractions")
-      o.fractions = next();
+      o.fractions = value();
     else if (a == "--cache")
-      o.cache_dir = next();
+      o.cache_dir = value();
     else if (a == "--out")
-      o.out = next();
+      o.out = value();
     else if (a == "--precision")
-      o.precisions = next();
+      o.precisions = value();
     else if (a == "--samples")
-      o.samples_target = std::stoi(next());
-    else if (a.rfind("--kokkos", 0) != 0) {
-      std::cerr << "unknown option " << a << "\n";
+      o.samples_target = std::stoi(value());
+    else
       return false;
-    }
-  }
-  return true;
+    return true;
+  });
 }
 
 // The throughput benchmark's dense packing with Gaussian velocities of zero net momentum.
@@ -320,19 +306,13 @@ Json row_json(const EnergyRun& r, double f, const DemParams& prm, int n, double 
 // A row per time-step fraction, each run from the same initial state.
 Json run_fractions(const Options& o, const HostParticles& host, const PeriodicBox& box, double tc) {
   Json rows = Json::array();
-  std::vector<std::string> precisions;
-  {
-    std::stringstream ss(o.precisions);
-    std::string p;
-    while (std::getline(ss, p, ',')) {
-      if (p != "double" && p != "mixed")
-        throw std::runtime_error("--precision takes double and/or mixed, not " + p);
-      precisions.push_back(p);
-    }
-  }
+  const std::vector<std::string> precisions = perf::word_list(o.precisions);
+  for (const std::string& p : precisions)
+    if (p != "double" && p != "mixed")
+      throw std::runtime_error("--precision takes double and/or mixed, not " + p);
   const bool compared = o.precisions != "double";
   for (const std::string& precision : precisions)
-    for (const double f : parse_list(o.fractions)) {
+    for (const double f : perf::number_list(o.fractions)) {
       DemParams prm = perf::bench_params();
       prm.dt = f * tc;
       prm.dt_guard = 1e9;     // scan beyond the engine's t_c/10 guard on purpose

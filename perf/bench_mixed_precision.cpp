@@ -22,10 +22,10 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "command_line.hpp"
 #include "core/io/output.hpp"
 #include "core/run/rng.hpp"
 #include "dense_packing.hpp"
@@ -51,37 +51,22 @@ struct Options {
   std::string strains = "1e-7,1e-6,1e-5,1e-4";
 };
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
-  return out;
-}
-
 bool parse_options(int argc, char** argv, Options& o) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-      return argv[++i];
-    };
+  return perf::read_options(argc, argv, [&](const std::string& a, const auto& value) {
     if (a == "--n")
-      o.n = std::stoi(next());
+      o.n = std::stoi(value());
     else if (a == "--steps")
-      o.steps = std::stol(next());
+      o.steps = std::stol(value());
     else if (a == "--cache")
-      o.cache_dir = next();
+      o.cache_dir = value();
     else if (a == "--out")
-      o.out = next();
+      o.out = value();
     else if (a == "--strains")
-      o.strains = next();
-    else if (a.rfind("--kokkos", 0) != 0) {
-      std::cerr << "unknown option " << a << "\n";
+      o.strains = value();
+    else
       return false;
-    }
-  }
-  return true;
+    return true;
+  });
 }
 
 DemParams params(bool mixed) {
@@ -194,7 +179,7 @@ Json moduli_probe(const Options& o, const HostParticles& host, const PeriodicBox
   Json rows = Json::array();
   const Probe base[2] = {probe(host, box, false, false, 0.0), probe(host, box, true, false, 0.0)};
   for (const bool shear : {false, true})
-    for (const double eps : parse_list(o.strains)) {
+    for (const double eps : perf::number_list(o.strains)) {
       const double d = modulus(probe(host, box, false, shear, eps), base[0], shear);
       const double m = modulus(probe(host, box, true, shear, eps), base[1], shear);
       Json r = Json::object();
