@@ -360,7 +360,7 @@ KOKKOS_INLINE_FUNCTION void contact_row(const PV& pv, const PeriodicBox& b, cons
 // `thread_per_particle`: the earlier mapping (each owner loops over its contacts), kept to
 // measure the difference; both evaluate every contact with the same arithmetic, so the
 // results are the same bit for bit.
-// `pv`: ParticleViews, or FixedPointViews for the mixed-precision pass.
+// `views`: ParticleViews, or FixedPointViews for the mixed-precision pass.
 template <class ExecSpace, class Model, class PV, class HistoryView, class PairView>
 void contact_rows_with(const PV& views, const Particles<ExecSpace>& p,
                        const NeighborList<ExecSpace>& nl, const HistoryView& history,
