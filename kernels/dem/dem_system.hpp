@@ -84,6 +84,10 @@ struct DemParams {
   // classical laws only (not with multi-contact laws). Off by default: the results then are
   // those of double precision bit for bit.
   bool mixed_precision = false;
+  // Host backends: what each wall feels kept as one row per (particle, wall), as on a device,
+  // instead of sums by block of particles (kernels/dem/wall_record.hpp: the same bits; 72
+  // bytes a wall for every particle; tests compare the two).
+  bool wall_rows = false;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -127,7 +131,7 @@ class DemSystem {
   struct Saved;
   DemSystem(const Saved& s, const Model& model, const DemParams& params, const std::string& origin)
       : p_(s.particles), box_(s.box), model_(model), params_(params), nl_(params.skin) {
-    if (s.wall_history.extent(0) > 0 || s.wall_record.extent(0) > 0)
+    if (s.wall_history.extent(0) > 0 || s.walls.touch.extent(0) > 0)
       throw InputError(origin + " holds walls: restore it into a system with the same walls");
     set_up();  // the saved state brings its particle volume
     restore(s, origin);
@@ -150,14 +154,15 @@ class DemSystem {
     // arithmetic, one sweep less); the last one is applied before returning.
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
-    double* const pack = near.on ? packed_records() : nullptr;
+    double* pack = near.on ? packed_records() : nullptr;
     for (long s = 0; s < n; ++s) {
       const double max_sq =
           kick_drift<kRot>(p_, box_, nl_.reference(), dt, s > 0, damp, near.drift_speed(), pack);
       if (straining) apply_affine_strain(p_, nl_.reference(), box_, rate_, dt);
       if (rebuild_due(max_sq)) {
-        rebuild();  // permutes f and torque with the particles
+        rebuild();  // permutes f and torque with the particles, releases the packed records
         near.valid = false;
+        if (pack) pack = packed_records();
       }
       walls_.update(time_ + dt);
       forces(dt, damp.on, near_mode(near), near.on, pack);
@@ -190,8 +195,7 @@ class DemSystem {
     const int nw = walls_.size();
     constexpr int H = Model::history;
     wall_history_ = wall_view("dem::wall_history", nw > 0 && H > 0 ? p_.n : 0, nw * H);
-    wall_record_ = wall_view("dem::wall_record", nw > 0 ? p_.n : 0, nw * kWallColumns);
-    wall_touch_ = WallTouchView<ExecSpace>("dem::wall_touch", nw > 0 ? p_.n : 0, nw);
+    wall_record_.reset(p_.n, nw, params_.wall_rows);
     mc_.resize_walls(p_.n, nw);
     external_ = nw > 0;
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;
@@ -226,9 +230,7 @@ class DemSystem {
   const MultiContact& multicontact() const { return mc_.options(); }
   const WallSet<ExecSpace>& walls() const { return walls_; }
   // Force, torque, contacts and energy of each wall, as of the last force evaluation.
-  std::vector<WallLoad> wall_loads() const {
-    return granular::wall_loads<ExecSpace>(wall_record_, p_.n, walls_.size());
-  }
+  std::vector<WallLoad> wall_loads() const { return wall_record_.loads(); }
   // Per-(particle, wall) history rows (particle order as in memory), for saved states.
   const Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>&
   wall_history() const {
@@ -241,9 +243,14 @@ class DemSystem {
   // memory; every per-particle array is permuted and the history follows by identity.
   void rebuild() {
     // The near list and its stream are recorded again after a rebuild: released first, so
-    // that they do not add to the peak of the permutation and the build.
+    // that they do not add to the peak of the permutation and the build. So are the packed
+    // records: the step's kick-drift pass wrote them in the order the rebuild changes, and
+    // the next force pass records the near list instead of reading them; the next kick-drift
+    // pass writes them all again (step() asks for them anew, packed_records()). The peak of
+    // a rebuild is the contact history's remap, which holds two copies of it.
     near_k_ = int_view();
     near_stream_.release();
+    pack_ = pack_view();
     typename Particles<ExecSpace>::int_view order;
     if (params_.sort) {
       nl_.bin(p_, box_);
@@ -251,8 +258,7 @@ class DemSystem {
       Kokkos::deep_copy(order, Kokkos::subview(nl_.cell_order(), std::make_pair(0, p_.n)));
       p_.permute(order);
       permute_rows<ExecSpace>(wall_history_, order, p_.n);
-      permute_rows<ExecSpace>(wall_record_, order, p_.n);
-      permute_rows<ExecSpace>(wall_touch_, order, p_.n);
+      wall_record_.reorder(order, p_.n);
       mc_.reorder(order, p_.n);
     }
     nl_.build(p_, box_, params_.sort);
@@ -395,7 +401,8 @@ class DemSystem {
     Particles<ExecSpace> particles;
     typename NeighborList<ExecSpace>::Saved list;
     typename history_type::Saved history;
-    wall_view wall_history, wall_record;
+    wall_view wall_history;
+    typename WallRecord<ExecSpace>::Saved walls;  // what the walls felt, and which contacts stood
     double time = 0.0;
     long steps = 0;
     double particle_volume = 0.0;
@@ -409,7 +416,7 @@ class DemSystem {
           "previous-step contact forces are not saved");
     Saved s;
     s.particles = p_, s.list = nl_.saved(), s.history = history_.saved();
-    s.wall_history = wall_history_, s.wall_record = wall_record_;
+    s.wall_history = wall_history_, s.walls = wall_record_.saved();
     s.time = time_, s.steps = steps_, s.particle_volume = particle_volume_, s.box = box_;
     for (int d = 0; d < 3; ++d) s.rate[d] = rate_[d];
     return s;
@@ -429,13 +436,13 @@ class DemSystem {
     auto same_shape = [](const wall_view& a, const wall_view& b) {
       return a.extent(0) == b.extent(0) && a.extent(1) == b.extent(1);
     };
-    if (!same_shape(s.wall_history, wall_history_) || !same_shape(s.wall_record, wall_record_))
+    if (!same_shape(s.wall_history, wall_history_) || !wall_record_.same_shape(s.walls))
       throw InputError(origin + " holds the walls of another system");
     p_ = q;
     nl_.restore(s.list, origin + "/neighbor_list");
     history_.restore(s.history, nl_, origin + "/history");
-    wall_history_ = s.wall_history, wall_record_ = s.wall_record;
-    wall_touch_ = wall_touch_of<ExecSpace>(wall_record_, p_.n, walls_.size());
+    wall_history_ = s.wall_history;
+    wall_record_.restore(s.walls);
     time_ = s.time, steps_ = s.steps, particle_volume_ = s.particle_volume, box_ = s.box;
     for (int d = 0; d < 3; ++d) rate_[d] = s.rate[d];
     walls_.update(time_);
@@ -615,7 +622,7 @@ class DemSystem {
     if (params_.mixed_precision) fixed_.update(p_, box_);
     if (mc_.active()) {  // run-time dispatch here, compile-time switches inside the kernels
       mc_.compute(p_, nl_, history_view(), pair_, box_, model_, params_.damping, rate_, dt, walls_,
-                  wall_history_, wall_record_, wall_touch_, params_.gravity, external_,
+                  wall_history_, wall_record_, params_.gravity, external_,
                   params_.batched_contacts);
       return;
     }
@@ -627,8 +634,8 @@ class DemSystem {
                    params_.flag_apart_rows ? row_flags_ : RowFlags<ExecSpace>(),
                    params_.mixed_precision ? &fixed_ : nullptr);
     if (external_)
-      add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_,
-                          wall_touch_, model_, params_.gravity, dt);
+      add_external_forces(p_, walls_.view(), walls_.size(), wall_history_, wall_record_, model_,
+                          params_.gravity, dt);
   }
   // Forces of a state whose contacts have no previous evaluation under the current law.
   void initial_forces() {
@@ -647,7 +654,7 @@ class DemSystem {
     };
     const DampingStart damp = damping_start();
     NearTrack near(near_usable(n, straining));
-    double* const pack = near.on ? packed_records() : nullptr;
+    double* pack = near.on ? packed_records() : nullptr;
     Kokkos::fence();
     timer.reset();
     for (long s = 0; s < n; ++s) {
@@ -659,6 +666,7 @@ class DemSystem {
       if (rebuild_due(max_sq)) {
         rebuild();
         near.valid = false;
+        if (pack) pack = packed_records();
         ++profile_->rebuilds;
       }
       lap(profile_->neighbor);
@@ -807,8 +815,8 @@ class DemSystem {
                                                                                  1, 1};
   StepProfile* profile_ = nullptr;
   WallSet<ExecSpace> walls_;
-  wall_view wall_history_, wall_record_;
-  WallTouchView<ExecSpace> wall_touch_;  // the record's contact flags (wall_forces.hpp)
+  wall_view wall_history_;
+  WallRecord<ExecSpace> wall_record_;  // what the walls felt (kernels/dem/wall_record.hpp)
   bool external_ = false;  // walls or gravity: one more pass over the particles per step
   using pair_view = Kokkos::View<double**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
   pair_view pair_;  // per-contact force and torques, written by the owner, gathered by both

@@ -411,13 +411,13 @@ class MultiContactForces {
   }
 
   // One force evaluation: pair forces, gather, walls and gravity, with the active law.
-  template <class Model, class HistoryView, class PairView, class WallHistoryView, class RecordView>
+  template <class Model, class HistoryView, class PairView, class WallHistoryView>
   void compute(const Particles<ExecSpace>& p, const NeighborList<ExecSpace>& nl,
                const HistoryView& history, const PairView& pair, const PeriodicBox& box,
                const Model& model, const Damping& damping, const double strain_rate[3], double dt,
                const WallSet<ExecSpace>& walls, const WallHistoryView& wall_history,
-               const RecordView& record, const WallTouchView<ExecSpace>& touch,
-               const double gravity[3], bool external, bool batched = true) const {
+               WallRecord<ExecSpace>& record, const double gravity[3], bool external,
+               bool batched = true) const {
     const int nw = walls.size();
     const int nmc = opt_.walls ? nw : 0;  // walls the law sees
     if (opt_.mode == MultiContact::Strain) {
@@ -428,10 +428,10 @@ class MultiContactForces {
         compute_pair_forces(p, nl, history, pair, box, model, strain_rate, dt, hook);
       gather_pair_forces<ExecSpace, Model>(p, nl, pair, damping);
       if (nmc > 0)
-        add_external_forces(p, walls.view(), nw, wall_history, record, touch, model, gravity, dt,
+        add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt,
                             multicontact::StrainWallHook<mem>{wall_});
       else if (external)
-        add_external_forces(p, walls.view(), nw, wall_history, record, touch, model, gravity, dt);
+        add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt);
     } else {
       multicontact::StressPairHook<mem> hook;
       hook.rows = entry_;
@@ -450,10 +450,9 @@ class MultiContactForces {
         for (int s = 0; s < kMaxSpecies; ++s) wh.nu[s] = opt_.poisson[s];
         wh.beta = opt_.beta, wh.exclude = opt_.own_contact ? 0.0 : 1.0;
         wh.particle_area = opt_.area == MultiContact::ParticleArea;
-        add_external_forces(p, walls.view(), nw, wall_history, record, touch, model, gravity, dt,
-                            wh);
+        add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt, wh);
       } else if (external) {
-        add_external_forces(p, walls.view(), nw, wall_history, record, touch, model, gravity, dt);
+        add_external_forces(p, walls.view(), nw, wall_history, record, model, gravity, dt);
       }
     }
   }

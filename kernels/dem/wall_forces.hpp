@@ -14,6 +14,7 @@
 #include "kernels/contact/contact_model.hpp"
 #include "kernels/dem/contact_forces.hpp"
 #include "kernels/dem/deterministic_sum.hpp"
+#include "kernels/dem/wall_record.hpp"
 
 namespace granular {
 
@@ -54,18 +55,6 @@ KOKKOS_INLINE_FUNCTION bool wall_geometry(const Body& bi, const Wall& w, bool ro
   return true;
 }
 
-// Columns of the per-(particle, wall) record: force on the wall (3), torque on the wall
-// about its reference point (3), contact flag, elastic energy, overlap / a_i.
-constexpr int kWallColumns = 9;
-
-// The contact flags of the record (column 6) as one byte per (particle, wall): what the wall
-// pass reads for every particle, where the record's rows (72 bytes a wall) are read only for
-// contacts. Reading the flag from the record stalled the pass on a cache miss per particle
-// (a quarter of the step in a box of 32768 spheres between two walls).
-template <class ExecSpace>
-using WallTouchView =
-    Kokkos::View<unsigned char**, Kokkos::LayoutRight, typename ExecSpace::memory_space>;
-
 // Extension point for laws that need more than the contact (multi-contact,
 // kernels/dem/multicontact.hpp): a hook may replace the evaluation of a touching sphere-wall
 // contact and record per-contact data. NoWallHook compiles the classical kernel unchanged.
@@ -79,18 +68,18 @@ struct NoWallHook {
 };
 
 // The wall pass over one particle: adds its wall contact forces and gravity to f and torque,
-// advances its wall histories and records each wall's share for the wall sums. A functor class
-// rather than a lambda: nvcc's wrapper of a host-device lambda inside a function template
-// instantiated in several translation units can be linked with a null copy helper, and the
-// walls' tests then jumped to address 0 on a device (docs/perf_design_notes.md, GPU).
-template <class ExecSpace, class Model, class HistoryView, class RecordView, class Hook>
+// advances its wall histories and gives each wall contact's share to the sink (WallRowSink or
+// WallBlockSink, kernels/dem/wall_record.hpp). A functor class rather than a lambda: nvcc's
+// wrapper of a host-device lambda inside a function template instantiated in several
+// translation units can be linked with a null copy helper, and the walls' tests then jumped to
+// address 0 on a device (docs/perf_design_notes.md, GPU).
+template <class ExecSpace, class Model, class HistoryView, class Hook>
 struct WallForcePass {
   ParticleViews<ExecSpace> pv;
   typename Particles<ExecSpace>::vec_view f, torque;
   typename WallSet<ExecSpace>::view_type walls;
   int nwalls;
   HistoryView history;
-  RecordView record;
   WallTouchView<ExecSpace> touch;
   Model m;
   Hook hook;
@@ -98,10 +87,10 @@ struct WallForcePass {
   bool weightless;  // g is (+0, +0, +0): m g is +0 for any particle, its mass is not read
   double dt;
 
-  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+  template <class Sink>
+  KOKKOS_INLINE_FUNCTION void particle(const int i, const Sink& sink) const {
     constexpr int H = Model::history;
     constexpr bool rot = Model::rotations;
-    constexpr int WC = kWallColumns;
     // Position and radius tell whether a wall touches; the rest of the particle is loaded
     // for its first contact only (most particles touch no wall).
     const double x[3] = {pv.x(i, 0), pv.x(i, 1), pv.x(i, 2)};
@@ -117,13 +106,12 @@ struct WallForcePass {
     for (int w = 0; w < nwalls; ++w) {
       const Wall& wall = walls(w);  // a reference: a copy on the stack stalled every load of it
       if (!(wall_overlap(x, a, wall) > 0.0)) {  // wall_geometry's own test
-        // Its record and history are already zero unless the contact just ended (the flag
+        // Its share and history are already zero unless the contact just ended (the flag
         // says so): rewriting them every step cost more memory traffic than the contacts.
         if (touch(i, w) != 0) {
-          for (int c = 0; c < WC; ++c) record(i, w * WC + c) = 0.0;
+          sink.ended(i, w);
           if constexpr (H > 0)
             for (int c = 0; c < H; ++c) history(i, w * H + c) = 0.0;  // contact forgotten
-          touch(i, w) = 0;
         }
         if constexpr (Hook::active) hook.apart(i, w);
         continue;
@@ -149,14 +137,15 @@ struct WallForcePass {
       const double r[3] = {bi.x[0] - wall.p[0], bi.x[1] - wall.p[1], bi.x[2] - wall.p[2]};
       double rxf[3];
       cross3(r, out.f, rxf);
+      double share[kWallColumns];
       for (int d = 0; d < 3; ++d) {
-        record(i, w * WC + d) = -out.f[d];
-        record(i, w * WC + 3 + d) = -rxf[d] - (rot ? out.q[d] : 0.0);
+        share[d] = -out.f[d];
+        share[3 + d] = -rxf[d] - (rot ? out.q[d] : 0.0);
       }
-      record(i, w * WC + 6) = 1.0;
-      record(i, w * WC + 7) = m.energy(s, h);
-      record(i, w * WC + 8) = s.delta / s.ai;
-      touch(i, w) = 1;
+      share[6] = 1.0;
+      share[7] = m.energy(s, h);
+      share[8] = s.delta / s.ai;
+      sink.contact(i, w, share);
     }
     for (int d = 0; d < 3; ++d) f(i, d) += fi[d];
     if constexpr (rot)
@@ -164,117 +153,67 @@ struct WallForcePass {
   }
 };
 
+// One thread per particle, each contact's share to the particle's row.
+template <class Pass, class ExecSpace>
+struct WallRowsDriver {
+  Pass pass;
+  WallRowSink<ExecSpace> sink;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const { pass.particle(i, sink); }
+};
+
+// One thread per block of kDeterministicBlock particles, visited in order, each contact's
+// share added to the block's sums.
+template <class Pass, class ExecSpace>
+struct WallBlocksDriver {
+  Pass pass;
+  typename WallRecord<ExecSpace>::sums_view sums;
+  int n, columns;
+  KOKKOS_INLINE_FUNCTION void operator()(const int b) const {
+    double* row = columns > 0 ? &sums(b, 0) : nullptr;
+    for (int c = 0; c < columns; ++c) row[c] = 0.0;
+    const WallBlockSink<ExecSpace> sink{row, pass.touch};
+    const int begin = b * kDeterministicBlock;
+    const int end = begin + kDeterministicBlock < n ? begin + kDeterministicBlock : n;
+    for (int i = begin; i < end; ++i) pass.particle(i, sink);
+  }
+};
+
 // Adds wall contact forces and gravity to f and torque (after the pair gather), advances
-// the wall histories, and records each wall's share per particle for the wall sums.
-// history: (n, walls * H); record: (n, walls * kWallColumns); touch: (n, walls), the record's
-// contact flags (wall_touch_of).
-template <class ExecSpace, class Model, class HistoryView, class RecordView,
-          class Hook = NoWallHook>
+// the wall histories (n, walls * H), and records what each wall feels (`record`, its layout
+// by blocks or by rows).
+template <class ExecSpace, class Model, class HistoryView, class Hook = NoWallHook>
 void add_external_forces(const Particles<ExecSpace>& p,
                          const typename WallSet<ExecSpace>::view_type& walls, int nwalls,
-                         const HistoryView& history, const RecordView& record,
-                         const WallTouchView<ExecSpace>& touch, const Model& model,
-                         const double gravity[3], double dt, const Hook& wall_hook = Hook()) {
+                         const HistoryView& history, WallRecord<ExecSpace>& record,
+                         const Model& model, const double gravity[3], double dt,
+                         const Hook& wall_hook = Hook()) {
   bool weightless = true;
   for (int d = 0; d < 3; ++d)
     weightless = weightless && gravity[d] == 0.0 && !std::signbit(gravity[d]);
-  const WallForcePass<ExecSpace, Model, HistoryView, RecordView, Hook> pass{
-      ParticleViews<ExecSpace>(p),
-      p.f,
-      p.torque,
-      walls,
-      nwalls,
-      history,
-      record,
-      touch,
-      model,
-      wall_hook,
-      {gravity[0], gravity[1], gravity[2]},
-      weightless,
-      dt};
-  Kokkos::parallel_for(Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n), pass);
-}
-
-// The largest overlap / a_i in column 8 of one wall's records (a functor, as above).
-template <class Cols>
-struct MaxOverlapPass {
-  Cols cols;
-  KOKKOS_INLINE_FUNCTION void operator()(const int i, double& m) const {
-    const double o = cols(i, 8);
-    m = o > m ? o : m;
-  }
-};
-
-// Row i's contact flags from the record's column 6 (a functor, as above).
-template <class RecordView, class TouchView>
-struct WallTouchPass {
-  RecordView record;
-  TouchView touch;
-  int nwalls;
-  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
-    for (int w = 0; w < nwalls; ++w) touch(i, w) = record(i, w * kWallColumns + 6) != 0.0 ? 1 : 0;
-  }
-};
-
-// The contact flags of a record (n rows, nwalls walls), for a record that comes from elsewhere
-// (a restored state).
-template <class ExecSpace, class RecordView>
-WallTouchView<ExecSpace> wall_touch_of(const RecordView& record, int n, int nwalls) {
-  WallTouchView<ExecSpace> touch("dem::wall_touch", nwalls > 0 ? n : 0, nwalls);
-  if (nwalls > 0)
+  using Pass = WallForcePass<ExecSpace, Model, HistoryView, Hook>;
+  const Pass pass{ParticleViews<ExecSpace>(p),
+                  p.f,
+                  p.torque,
+                  walls,
+                  nwalls,
+                  history,
+                  record.touch(),
+                  model,
+                  wall_hook,
+                  {gravity[0], gravity[1], gravity[2]},
+                  weightless,
+                  dt};
+  if (record.by_blocks()) {
+    const int blocks = (p.n + kDeterministicBlock - 1) / kDeterministicBlock;
     Kokkos::parallel_for(
-        "dem::wall_touch_of", Kokkos::RangePolicy<ExecSpace>(0, n),
-        WallTouchPass<RecordView, WallTouchView<ExecSpace>>{record, touch, nwalls});
-  return touch;
-}
-
-// New row i of b is old row order(i) of a (a functor, as above).
-template <class View2D, class Order>
-struct PermuteRowsPass {
-  View2D b, a;
-  Order order;
-  int nc;
-  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
-    const int o = order(i);
-    for (int c = 0; c < nc; ++c) b(i, c) = a(o, c);
+        Hook::label, Kokkos::RangePolicy<ExecSpace>(0, blocks),
+        WallBlocksDriver<Pass, ExecSpace>{pass, record.block_sums_view(), p.n,
+                                          record.walls() > 0 ? nwalls * kWallColumns : 0});
+  } else {
+    Kokkos::parallel_for(Hook::label, Kokkos::RangePolicy<ExecSpace>(0, p.n),
+                         WallRowsDriver<Pass, ExecSpace>{pass, record.row_sink()});
   }
-};
-
-// What the walls feel, summed over particles in a fixed order (thread-count independent).
-struct WallLoad {
-  double force[3] = {};   // total force on the wall
-  double torque[3] = {};  // about the wall's reference point
-  double contacts = 0;
-  double energy = 0;       // elastic energy stored in its contacts
-  double max_overlap = 0;  // largest delta / a_i
-};
-
-template <class ExecSpace, class RecordView>
-std::vector<WallLoad> wall_loads(const RecordView& record, int n, int nwalls) {
-  std::vector<WallLoad> out(nwalls);
-  for (int w = 0; w < nwalls; ++w) {
-    auto cols = Kokkos::subview(record, Kokkos::ALL,
-                                std::make_pair(w * kWallColumns, (w + 1) * kWallColumns));
-    const auto sums = deterministic_column_sums<kWallColumns, ExecSpace>(cols, n);
-    for (int d = 0; d < 3; ++d) out[w].force[d] = sums[d], out[w].torque[d] = sums[3 + d];
-    out[w].contacts = sums[6];
-    out[w].energy = sums[7];
-    double mo = 0.0;
-    Kokkos::parallel_reduce("dem::wall_loads::max_overlap", Kokkos::RangePolicy<ExecSpace>(0, n),
-                            MaxOverlapPass<decltype(cols)>{cols}, Kokkos::Max<double>(mo));
-    out[w].max_overlap = mo;
-  }
-  return out;
-}
-
-// Rows of a (n, c) view reordered with the particles: new row i is old row order(i).
-template <class ExecSpace, class View2D, class Order>
-void permute_rows(View2D& a, const Order& order, int n) {
-  if (a.extent(0) == 0) return;
-  View2D b(a.label(), a.extent(0), a.extent(1));
-  Kokkos::parallel_for("dem::permute_rows", Kokkos::RangePolicy<ExecSpace>(0, n),
-                       PermuteRowsPass<View2D, Order>{b, a, order, static_cast<int>(a.extent(1))});
-  a = b;
+  record.evaluated();
 }
 
 }  // namespace granular

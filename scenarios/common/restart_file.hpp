@@ -119,7 +119,8 @@ void write_restart(H5Writer& out, const std::string& g, const System& sys) {
   write_list(out, g + "/neighbor_list", s.list);
   write_history<typename System::history_type>(out, g + "/history", s.history);
   save_view(out, g + "/walls/history", s.wall_history);
-  save_view(out, g + "/walls/record", s.wall_record);
+  save_view(out, g + "/walls/touch", s.walls.touch);
+  save_view(out, g + "/walls/sums", s.walls.sums);
   std::vector<double> scalars = {s.time, static_cast<double>(s.steps), s.particle_volume};
   for (int d = 0; d < 3; ++d)
     scalars.insert(scalars.end(),
@@ -132,6 +133,12 @@ template <class System>
 typename System::Saved read_restart(const H5Reader& in, const std::string& g) {
   using Exec = typename System::execution_space;
   typename System::Saved s;
+  // Files of earlier versions hold one row per (particle, wall) instead of the flags and the
+  // block sums (kernels/dem/wall_record.hpp).
+  if (in.has(g + "/walls/record") && !in.has(g + "/walls/touch"))
+    throw InputError(restart_origin(g) +
+                     " was written by an earlier version of the engine (walls/record): resume it "
+                     "with the version that wrote it, or start the run again");
   const auto v = in.reals(g + "/scalars");
   if (v.size() != 15) throw InputError(restart_origin(g) + " has malformed scalars");
   auto& q = s.particles;
@@ -146,7 +153,8 @@ typename System::Saved read_restart(const H5Reader& in, const std::string& g) {
   s.list = read_list<Exec>(in, g + "/neighbor_list");
   s.history = read_history<typename System::history_type>(in, g + "/history");
   load_view(in, g + "/walls/history", s.wall_history);
-  load_view(in, g + "/walls/record", s.wall_record);
+  load_view(in, g + "/walls/touch", s.walls.touch);
+  load_view(in, g + "/walls/sums", s.walls.sums);
   s.time = v[0], s.steps = static_cast<long>(v[1]), s.particle_volume = v[2];
   for (int d = 0; d < 3; ++d) {
     s.box.lo[d] = v[3 + 4 * d], s.box.len[d] = v[4 + 4 * d];

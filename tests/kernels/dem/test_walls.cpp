@@ -217,8 +217,9 @@ struct Pile {
       walls.push_back(s);
     }
   }
-  DemSystem<Exec, Model> system(long rebuild_every, bool sort) const {
+  DemSystem<Exec, Model> system(long rebuild_every, bool sort, bool wall_rows = false) const {
     DemParams prm;
+    prm.wall_rows = wall_rows;
     prm.dt = 2e-3, prm.skin = 0.1, prm.damping.translational = 0.05,
     prm.rebuild_every = rebuild_every;
     prm.damping.rotational = 0.01, prm.sort = sort, prm.gravity[2] = -1.0;
@@ -290,18 +291,20 @@ TYPED_TEST(WallTest, WallHistorySurvivesReorderingAndRebuildsIdentically) {
 }
 
 // A state saved while the pile bounces on its walls, restored into another system with the
-// same walls, continues bit for bit: the wall springs, the records and which wall contacts
-// stand (their flags, rebuilt from the records) come back with it, so contacts that end and
-// start again after the restart are forgotten and begun as in the run that never stopped.
-TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
-  Pile<TypeParam> pile(4, 3);
+// same walls, continues bit for bit: the wall springs, the walls' sums and which wall contacts
+// stand come back with it, so contacts that end and start again after the restart are
+// forgotten and begun as in the run that never stopped. Both layouts of the walls' record.
+template <class Exec>
+void restored_pile_continues_bitwise(bool wall_rows) {
+  SCOPED_TRACE(wall_rows ? "walls recorded by rows" : "walls summed by blocks");
+  Pile<Exec> pile(4, 3);
   for (int i = 0; i < pile.h.size(); ++i) pile.h.vx[i] = 0.4 * std::sin(i), pile.h.vz[i] = -0.5;
   auto contacts = [](const auto& sys) {
     double c = 0;
     for (const auto& l : sys.wall_loads()) c += l.contacts;
     return c;
   };
-  auto a = pile.system(0, true);
+  auto a = pile.system(0, true, wall_rows);
   for (int k = 0; k < 40 && contacts(a) <= 10; ++k) a.step(250);  // falls onto the floor
   ASSERT_GT(contacts(a), 10) << "the state must hold wall contacts";
   // Through a restart file, as a resumed run does (saved() shares the system's arrays).
@@ -313,7 +316,7 @@ TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
     write_restart(w, "/r", a);
     w.commit();
   }
-  auto b = pile.system(0, true);
+  auto b = pile.system(0, true, wall_rows);
   b.step(3);  // moved on: everything must come from the file
   load_restart(H5Reader(path), "/r", b);
   std::filesystem::remove_all(dir);
@@ -337,6 +340,74 @@ TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
     EXPECT_EQ(la[w].contacts, lb[w].contacts) << "wall " << w;
     for (int d = 0; d < 3; ++d) EXPECT_EQ(la[w].force[d], lb[w].force[d]) << "wall " << w;
   }
+}
+
+TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
+  for (const bool rows : {false, true}) restored_pile_continues_bitwise<TypeParam>(rows);
+}
+
+// The walls' loads summed by blocks of particles as the wall pass goes (the host's layout)
+// are the loads summed from one row per (particle, wall) (the device's layout), bit for bit,
+// and so is the motion: a pile of 400 spheres (two blocks of 256, reordered at rebuilds) falls
+// and bounces on its floor and side walls, its wall contacts starting and ending.
+TYPED_TEST(WallTest, WallLoadsSummedByBlocksEqualThoseOfPerParticleRowsBitwise) {
+  Pile<TypeParam> pile(10, 4);
+  for (int i = 0; i < pile.h.size(); ++i) pile.h.vx[i] = 0.3 * std::sin(i), pile.h.vz[i] = -0.4;
+  auto blocks = pile.system(0, true, false);
+  auto rows = pile.system(0, true, true);
+  double lo = kInf, hi = 0;
+  for (int k = 0; k < 24; ++k) {
+    blocks.step(150), rows.step(150);
+    const auto lb = blocks.wall_loads(), lr = rows.wall_loads();
+    ASSERT_EQ(lb.size(), 5u);
+    ASSERT_EQ(lr.size(), 5u);
+    double c = 0;
+    for (size_t w = 0; w < lb.size(); ++w) {
+      EXPECT_EQ(lb[w].contacts, lr[w].contacts) << "wall " << w << ", round " << k;
+      EXPECT_EQ(lb[w].energy, lr[w].energy) << "wall " << w << ", round " << k;
+      EXPECT_EQ(lb[w].max_overlap, lr[w].max_overlap) << "wall " << w << ", round " << k;
+      for (int d = 0; d < 3; ++d) {
+        EXPECT_EQ(lb[w].force[d], lr[w].force[d]) << "wall " << w << ", round " << k;
+        EXPECT_EQ(lb[w].torque[d], lr[w].torque[d]) << "wall " << w << ", round " << k;
+      }
+      c += lb[w].contacts;
+    }
+    lo = std::min(lo, c), hi = std::max(hi, c);
+    EXPECT_EQ(blocks.measure().epot, rows.measure().epot) << "round " << k;
+  }
+  EXPECT_GT(lo, 10) << "the pile must touch its walls in every round";
+  EXPECT_GT(hi - lo, 50) << "too few wall contacts began or ended";  // 13 to 163 when written
+  EXPECT_GT(blocks.neighbor_list().builds(), 2) << "no reordering between the rounds";
+  auto host = [](const auto& v) {
+    auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), v);
+    return std::vector<double>(h.data(), h.data() + h.size());
+  };
+  EXPECT_EQ(host(blocks.particles().x), host(rows.particles().x));
+  EXPECT_EQ(host(blocks.particles().f), host(rows.particles().f));
+  EXPECT_EQ(host(blocks.wall_history()), host(rows.wall_history()));
+}
+
+// A restart file of an earlier version (one row per particle and wall, walls/record) is
+// refused with a message that names it, before anything is read.
+TEST(WallRestart, FileWithPerParticleWallRowsIsRefusedWithAClearMessage) {
+  const auto dir = granular::testing::unique_temp_path("granular_wall_restart_old");
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "restart.h5").string();
+  {
+    H5Writer w(path);
+    w.write("/r/walls/record", std::vector<double>(18, 0.0));
+    w.commit();
+  }
+  using System =
+      DemSystem<Kokkos::DefaultHostExecutionSpace, Pile<Kokkos::DefaultHostExecutionSpace>::Model>;
+  try {
+    read_restart<System>(H5Reader(path), "/r");
+    ADD_FAILURE() << "an earlier version's restart file was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("walls/record"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("earlier version"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TYPED_TEST(WallTest, NoContactAcrossAWalledAxis) {
