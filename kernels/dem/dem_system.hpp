@@ -84,10 +84,11 @@ struct DemParams {
   // classical laws only (not with multi-contact laws). Off by default: the results then are
   // those of double precision bit for bit.
   bool mixed_precision = false;
-  // Host backends: what each wall feels kept as one row per (particle, wall), as on a device,
-  // instead of sums by block of particles (kernels/dem/wall_record.hpp: the same bits; 72
-  // bytes a wall for every particle; tests compare the two).
-  bool wall_rows = false;
+  // What each wall feels, kept as sums by block of particles or as one row per (particle,
+  // wall) (kernels/dem/wall_record.hpp: the same bits; rows cost 72 bytes a wall for every
+  // particle). Auto: blocks on host backends where every thread has blocks enough; tests
+  // compare the two.
+  WallLayout wall_layout = WallLayout::Auto;
 };
 
 // Wall time per phase of the step, filled only when profiling is switched on (it fences
@@ -195,7 +196,7 @@ class DemSystem {
     const int nw = walls_.size();
     constexpr int H = Model::history;
     wall_history_ = wall_view("dem::wall_history", nw > 0 && H > 0 ? p_.n : 0, nw * H);
-    wall_record_.reset(p_.n, nw, params_.wall_rows);
+    wall_record_.reset(p_.n, nw, params_.wall_layout);
     mc_.resize_walls(p_.n, nw);
     external_ = nw > 0;
     for (int d = 0; d < 3; ++d) external_ = external_ || params_.gravity[d] != 0.0;

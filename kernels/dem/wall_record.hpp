@@ -4,12 +4,14 @@
 //
 // The sums are those of kernels/dem/deterministic_sum.hpp: per block of kDeterministicBlock
 // consecutive particles, in particle order, then the blocks in order. Two layouts give them:
-//  - by blocks (host backends): the wall pass visits each block's particles in order in one
+//  - by blocks (host backends, systems of enough blocks: WallLayout): the wall pass visits each
+//  block's particles in order in one
 //    thread and adds each contact's share to its block's row of sums as it goes; nothing is
 //    stored per particle. A per-(particle, wall) record would be 72 bytes a wall for every
 //    particle, most of which touch no wall (288 bytes a particle in the peer's walled box of
 //    two walls, docs/perf_design_notes.md, CPUs).
-//  - by rows (devices, and the host on request): the pass runs one thread per particle and
+//  - by rows (devices, small systems, and the host on request): the pass runs one thread per
+//  particle and
 //    writes each contact's share to the particle's row; the block sums are taken from the
 //    rows when asked for.
 // Both add the same numbers in the same order to a sum that starts at +0: a block's sum over
@@ -113,19 +115,26 @@ struct WallFlagsPass {
   }
 };
 
+// Which layout a system takes. Auto: by blocks on a host backend where each thread has at least
+// kWallBlocksPerThread blocks to take, by rows otherwise (a box of 514 balls is three blocks:
+// with two threads, one of them took two and the wall pass ran 1.6-2.1x slower than by rows).
+// Blocks is honoured on host backends only; both give the same bits.
+enum class WallLayout { Auto, Rows, Blocks };
+constexpr int kWallBlocksPerThread = 4;
+
 template <class ExecSpace>
 class WallRecord {
  public:
   using mem = typename ExecSpace::memory_space;
   using sums_view = Kokkos::View<double**, Kokkos::LayoutRight, mem>;
 
-  // Rows where asked for (`rows`) and on a device, block sums on a host backend otherwise.
   static constexpr bool host = std::is_same_v<mem, Kokkos::HostSpace>;
 
   // n particles, nw walls; everything zero (no contact stood before).
-  void reset(int n, int nw, bool rows) {
+  void reset(int n, int nw, WallLayout layout) {
     n_ = nw > 0 ? n : 0, nw_ = nw;
-    by_blocks_ = host && !rows;
+    const bool enough = blocks() >= kWallBlocksPerThread * ExecSpace().concurrency();
+    by_blocks_ = host && (layout == WallLayout::Blocks || (layout == WallLayout::Auto && enough));
     touch_ = WallTouchView<ExecSpace>("dem::wall_touch", n_, nw);
     rows_ = sums_view("dem::wall_record", by_blocks_ ? 0 : n_, by_blocks_ ? 0 : nw * kWallColumns);
     sums_ = sums_view("dem::wall_sums", blocks(), nw * kWallColumns);

@@ -217,9 +217,10 @@ struct Pile {
       walls.push_back(s);
     }
   }
-  DemSystem<Exec, Model> system(long rebuild_every, bool sort, bool wall_rows = false) const {
+  DemSystem<Exec, Model> system(long rebuild_every, bool sort,
+                                WallLayout layout = WallLayout::Auto) const {
     DemParams prm;
-    prm.wall_rows = wall_rows;
+    prm.wall_layout = layout;
     prm.dt = 2e-3, prm.skin = 0.1, prm.damping.translational = 0.05,
     prm.rebuild_every = rebuild_every;
     prm.damping.rotational = 0.01, prm.sort = sort, prm.gravity[2] = -1.0;
@@ -295,8 +296,8 @@ TYPED_TEST(WallTest, WallHistorySurvivesReorderingAndRebuildsIdentically) {
 // stand come back with it, so contacts that end and start again after the restart are
 // forgotten and begun as in the run that never stopped. Both layouts of the walls' record.
 template <class Exec>
-void restored_pile_continues_bitwise(bool wall_rows) {
-  SCOPED_TRACE(wall_rows ? "walls recorded by rows" : "walls summed by blocks");
+void restored_pile_continues_bitwise(WallLayout layout) {
+  SCOPED_TRACE(layout == WallLayout::Rows ? "walls recorded by rows" : "walls summed by blocks");
   Pile<Exec> pile(4, 3);
   for (int i = 0; i < pile.h.size(); ++i) pile.h.vx[i] = 0.4 * std::sin(i), pile.h.vz[i] = -0.5;
   auto contacts = [](const auto& sys) {
@@ -304,7 +305,7 @@ void restored_pile_continues_bitwise(bool wall_rows) {
     for (const auto& l : sys.wall_loads()) c += l.contacts;
     return c;
   };
-  auto a = pile.system(0, true, wall_rows);
+  auto a = pile.system(0, true, layout);
   for (int k = 0; k < 40 && contacts(a) <= 10; ++k) a.step(250);  // falls onto the floor
   ASSERT_GT(contacts(a), 10) << "the state must hold wall contacts";
   // Through a restart file, as a resumed run does (saved() shares the system's arrays).
@@ -316,7 +317,7 @@ void restored_pile_continues_bitwise(bool wall_rows) {
     write_restart(w, "/r", a);
     w.commit();
   }
-  auto b = pile.system(0, true, wall_rows);
+  auto b = pile.system(0, true, layout);
   b.step(3);  // moved on: everything must come from the file
   load_restart(H5Reader(path), "/r", b);
   std::filesystem::remove_all(dir);
@@ -343,7 +344,8 @@ void restored_pile_continues_bitwise(bool wall_rows) {
 }
 
 TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
-  for (const bool rows : {false, true}) restored_pile_continues_bitwise<TypeParam>(rows);
+  for (const WallLayout layout : {WallLayout::Blocks, WallLayout::Rows})
+    restored_pile_continues_bitwise<TypeParam>(layout);
 }
 
 // The walls' loads summed by blocks of particles as the wall pass goes (the host's layout)
@@ -353,8 +355,8 @@ TYPED_TEST(WallTest, StateRestoredWhileTouchingWallsContinuesBitwise) {
 TYPED_TEST(WallTest, WallLoadsSummedByBlocksEqualThoseOfPerParticleRowsBitwise) {
   Pile<TypeParam> pile(10, 4);
   for (int i = 0; i < pile.h.size(); ++i) pile.h.vx[i] = 0.3 * std::sin(i), pile.h.vz[i] = -0.4;
-  auto blocks = pile.system(0, true, false);
-  auto rows = pile.system(0, true, true);
+  auto blocks = pile.system(0, true, WallLayout::Blocks);
+  auto rows = pile.system(0, true, WallLayout::Rows);
   double lo = kInf, hi = 0;
   for (int k = 0; k < 24; ++k) {
     blocks.step(150), rows.step(150);
