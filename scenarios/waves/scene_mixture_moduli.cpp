@@ -742,10 +742,11 @@ Json choices_json(const Setup& u) {
   Json mats = Json::object();
   for (const MixtureMaterial& m : u.mats.materials) {
     Json j = Json::object();
-    j["modulus_reading"] = m.modulus_key == "shear_modulus"
-                               ? "the source's moduli column read as the shear modulus "
-                                 "(default of mixtures-and-waves.md §3): E = 2 G (1 + nu)"
-                               : "the source's moduli column read as Young's modulus";
+    j["modulus_reading"] =
+        m.modulus_key == "shear_modulus"
+            ? "the source's moduli column read as the shear modulus "
+              "(default of docs/model_mixtures_and_waves.md §5): E = 2 G (1 + nu)"
+            : "the source's moduli column read as Young's modulus";
     j["young_modulus_MPa"] = m.young;
     mats[m.name] = j;
   }
