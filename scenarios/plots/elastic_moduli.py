@@ -393,12 +393,37 @@ if len({j["mu_preparation"] for j in jam}) > 1:
     mu = np.array([j["mu_preparation"] for j in jam], float)
     val = lambda k: np.array([np.nan if j.get(k) is None else j[k] for j in jam], float)
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.errorbar(mu, val("phi_J"), yerr=val("phi_J_stderr"), fmt="o-", color="C0", capsize=3,
-                label="phi_J (fit of the unloading branch)")
-    ax.plot(mu, val("phi_lowest_jammed"), "v", color="C1", label="lowest phi with a network (unloading)")
-    ax.plot(mu, val("phi_highest_unjammed"), "^", color="C2", label="highest phi without one")
+    # Only the series that have a value are drawn: a branch that stays jammed down to its
+    # lowest target has no fitted root and no unjammed state, and the chart says so instead
+    # of listing empty series.
+    phi_j = val("phi_J")
+    if np.isfinite(phi_j).any():
+        ax.errorbar(mu, phi_j, yerr=np.nan_to_num(val("phi_J_stderr")), fmt="o-", color="C0",
+                    capsize=3, label="phi_J (fit of the unloading branch)")
+    missing = []
+    for key, mk, c, lab in (("phi_lowest_jammed", "v", "C1", "lowest phi with a network (unloading)"),
+                            ("phi_highest_unjammed", "^", "C2", "highest phi without one")):
+        y = val(key)
+        if np.isfinite(y).any():
+            ax.plot(mu, y, mk, color=c, label=lab)
+    if not np.isfinite(phi_j).all():
+        missing.append("no phi_J for mu = %s (fewer than 4 unloading samples\nwith 0 < P <= "
+                       "preparation.jamming_fit_pressure_max)" % ", ".join(
+                           "%g" % m for m, p in zip(mu, phi_j) if not np.isfinite(p)))
+    unj = val("phi_highest_unjammed")
+    if not np.isfinite(unj).all():
+        missing.append("no unjammed state for mu = %s\n(a network down to the lowest target)" %
+                       ", ".join("%g" % m for m, p in zip(mu, unj) if not np.isfinite(p)))
     ax.set_xscale("symlog", linthresh=0.01)
-    ax.set_xlabel("preparation friction mu")
+    # The notes go under the axis label, where no point can hide them.
+    ax.set_xlabel("\n".join(["preparation friction mu"] + missing))
+    fig.set_size_inches(6, 4 + 0.3 * sum(m.count("\n") + 1 for m in missing))
+    # Densities equal to a few digits (a branch stopped at its lowest target) get a readable
+    # range instead of an offset axis of 1e-7.
+    ax.ticklabel_format(axis="y", useOffset=False)
+    lo, hi = ax.get_ylim()
+    if hi - lo < 0.02:
+        ax.set_ylim(0.5 * (lo + hi) - 0.01, 0.5 * (lo + hi) + 0.01)
     ax.set_ylabel("jamming volume fraction")
     ax.legend(fontsize=7)
     if title:
