@@ -71,8 +71,25 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 // (stopped at a checkpoint or a time budget, or failed) leaves its run record as one line of
 // <out>/run_parts.jsonl; the record of the part that completes the run lists them, with the
 // wall time of all parts together, so that a study's record is not only its last part. A part
-// killed outright (SIGKILL, a power cut) leaves no line: its time is not counted.
+// killed outright (SIGKILL, the machine stopping) cannot write its line as it ends, so a long
+// study keeps one for itself at each progress report, with the status "interrupted" and its
+// wall time so far: what is left of it after a kill counts the part to its last report.
 constexpr const char* kPartsFile = "run_parts.jsonl";
+
+// Writes the parts file: the earlier parts, then `rec` as one line (written to a temporary
+// name and renamed, so a kill leaves the previous file whole).
+void write_parts(const std::string& dir, const std::vector<std::string>& earlier, const Json& rec) {
+  std::string lines;
+  for (const std::string& p : earlier) lines += p + "\n";
+  std::string line = rec.dump(0);
+  for (char& c : line)
+    if (c == '\n') c = ' ';  // formatting only: JSON strings hold no raw newline
+  try {
+    write_text_file(dir + "/" + kPartsFile, lines + line + "\n");
+  } catch (const std::exception& e) {  // never hides why the run ended
+    std::cerr << "warning: " << kPartsFile << " not written: " << e.what() << "\n";
+  }
+}
 
 std::vector<std::string> read_parts(const std::string& dir) {
   std::vector<std::string> parts;
@@ -217,16 +234,7 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
       std::error_code ec;
       fs::remove(parts_path, ec);  // folded into summary.json's record
     } else {
-      std::string lines;
-      for (const std::string& p : run.earlier_parts) lines += p + "\n";
-      std::string line = rec.dump(0);
-      for (char& c : line)
-        if (c == '\n') c = ' ';  // formatting only: JSON strings hold no raw newline
-      try {
-        write_text_file(parts_path, lines + line + "\n");
-      } catch (const std::exception& e) {  // never hides why the run ended
-        std::cerr << "warning: " << kPartsFile << " not written: " << e.what() << "\n";
-      }
+      write_parts(opts.out_dir, run.earlier_parts, rec);
     }
     add_earlier_parts(rec, run.earlier_parts, wall);
     write_report(opts.out_dir, rec);
@@ -263,6 +271,14 @@ void report_progress(const std::string& status) {
   rec["scene_file"] = run.scene_file;
   rec["summary_from_this_run"] = false;
   write_report(run.dir, rec);
+  // This part's line as it would stay if the part were killed now; the part's own end
+  // replaces it (stopped, failed) or removes the file (complete).
+  if (run.outputs_begun && fs::is_directory(run.dir)) {
+    rec["status"] = "interrupted";
+    rec["message"] = "the part ended without its own record (killed, or the machine stopped); " +
+                     std::string("its wall time runs to its last progress report: ") + status;
+    write_parts(run.dir, run.earlier_parts, rec);
+  }
 }
 
 }  // namespace granular

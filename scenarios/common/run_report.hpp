@@ -43,8 +43,9 @@ void run_scene(const SceneEntry& entry, const SceneFile& scene, const RunOptions
 void note_outputs_begun(const RunOptions& opts);
 
 // For long studies: rewrites the report of the run in progress with `status` (a stage just
-// finished), at most once every few seconds. Does nothing outside run_scene (tests calling
-// a driver directly).
+// finished), at most once every few seconds, and this part's line of run_parts.jsonl as a kill
+// would leave it ("interrupted", its wall time so far), so that a resume after a kill still
+// counts the killed part. Does nothing outside run_scene (tests calling a driver directly).
 void report_progress(const std::string& status);
 
 }  // namespace granular

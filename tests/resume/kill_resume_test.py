@@ -38,7 +38,10 @@ Checked after every kill (and in commits mode at every stop):
     those shapes; a stage pointer names a stage whose files are all there and a finished
     unit's index has its HDF5 file (what a resume reads);
   - a summary.json (a folder that looks finished) comes with the whole output set of the
-    uninterrupted run.
+    uninterrupted run;
+  - the record of the parts (run_parts.jsonl): a resumed run killed leaves the lines it
+    found and at most its own, "interrupted" (written at its progress reports), and a run
+    that ends by itself lists exactly the lines it found as its summary's earlier parts.
 Every kill is followed by --resume, as a user does after any kill, also when the folder
 already looks finished. A resume refused for want of a checkpoint (killed before the first
 one, or after the run removed it) must leave the folder as it was; then a folder without
@@ -82,6 +85,9 @@ import verify_references  # noqa: E402  (summary.json numbers without the run re
 # A snapshot series (snapshot_series.hpp) restarts where a resumed run resumed: compared
 # frame by frame, not as one file; so is its H5MD twin, whose frames are rows by step.
 SERIES = {"snapshots.h5": "snapshots.xdmf"}
+# The records of a run's earlier parts (run_report.cpp): one JSON line per part, the running
+# part's own line ("interrupted") rewritten at each progress report of a long study.
+PARTS = "run_parts.jsonl"
 H5MD_SERIES = {"snapshots.h5md"}
 
 
@@ -302,11 +308,17 @@ class Content:
 
     def __init__(self, rel, path, out_dir):
         self.rel, self.error, self.items, self.numbers = rel, None, None, None
+        self.parts = None
         self.refs, self.shapes, self.frames = [], {}, None
         name = os.path.basename(rel)
         try:
             if name.endswith(".h5") or name in H5MD_SERIES:
                 self.read_h5(path)
+            elif name == PARTS:
+                # Run records with wall times: read whole, line by line, never compared as a
+                # result (parts_checks judges them).
+                self.parts = [json.loads(l) for l in Path(path).read_text().splitlines() if l]
+                self.digest = "run record"
             elif name == "summary.json":
                 json.loads(Path(path).read_text())  # refused when cut short
                 self.numbers = verify_references.summary_numbers(path, out_dir)
@@ -509,6 +521,8 @@ def inspect(folder, contents, ref):
                                 % (rel, ", ".join(sorted(strange)[:4])))
         elif rel in SERIES.values():
             pass  # its frame list follows its series file (checked through its refs)
+        elif rel == PARTS:
+            pass  # run records (wall times): parts_checks
         elif c.digest not in ref.versions.get(rel, {}):
             known = ref.versions.get(rel)
             why = "a file the uninterrupted run never wrote" if not known else \
@@ -517,6 +531,54 @@ def inspect(folder, contents, ref):
             problems.append("%s: %s" % (rel, why))
     if "summary.json" in contents and ref is not None:
         problems += compare_final(contents, ref, extra_allowed=True)
+    return problems
+
+
+def parts_of(contents):
+    c = contents.get(PARTS)
+    return list(c.parts) if c is not None and c.parts is not None else []
+
+
+def parts_checks(before, contents, resumed, killed, summary_path):
+    """The record of a run made of parts. A resumed run starts from the parts file it finds
+    (`before`); killed, it leaves those lines and at most one more, its own, "interrupted"
+    (when it reached a progress report), or no file once its summary is there; ending by
+    itself it folds exactly those lines into summary.json's earlier_parts and removes the
+    file. A fresh run has no earlier parts."""
+    problems = []
+    earlier = parts_of(before) if resumed else []
+    if killed:
+        if not resumed:
+            return problems  # a fresh run may leave an old folder's file until its first report
+        now = parts_of(contents)
+        if not now and PARTS not in contents:
+            if earlier and "summary.json" not in contents:
+                problems.append("%s is gone, with the %d earlier parts it listed, and no "
+                                "summary holds them" % (PARTS, len(earlier)))
+            return problems
+        if now[:len(earlier)] != earlier or len(now) > len(earlier) + 1:
+            problems.append("%s holds %d lines where the run found %d and may add one: %s" % (
+                PARTS, len(now), len(earlier), [p.get("status") for p in now]))
+        elif len(now) == len(earlier) + 1 and now[-1].get("status") != "interrupted":
+            problems.append("the killed part's line in %s says %r, not \"interrupted\"" % (
+                PARTS, now[-1].get("status")))
+        return problems
+    if PARTS in contents:
+        problems.append("%s is left beside the finished run's summary.json" % PARTS)
+    try:
+        run = json.loads(Path(summary_path).read_text())["run"]
+    except (OSError, ValueError, KeyError) as e:
+        return problems + ["summary.json has no run record (%s)" % e]
+    listed = run.get("earlier_parts", [])
+    if listed != earlier:
+        problems.append("summary.json lists %d earlier parts %s where the run found %d %s" % (
+            len(listed), [p.get("status") for p in listed], len(earlier),
+            [p.get("status") for p in earlier]))
+    elif earlier:
+        total = run["wall_time_s"] + sum(p["wall_time_s"] for p in earlier)
+        if abs(run.get("wall_time_all_parts_s", -1) - total) > 1e-6 * total:
+            problems.append("wall_time_all_parts_s %r is not the sum of the parts' %r" % (
+                run.get("wall_time_all_parts_s"), total))
     return problems
 
 
@@ -755,7 +817,8 @@ class Test:
                             index, "resumed run" if resume else "run", engine.p.returncode,
                             ": " + said[-1] if said else ""), engine)
                         return True
-                    for p in inspect(folder, contents, ref) + compare_final(contents, ref):
+                    for p in inspect(folder, contents, ref) + compare_final(contents, ref) + \
+                            parts_checks(before, contents, resume, False, out / "summary.json"):
                         self.fail("chain %d, finished run: %s" % (index, p), engine)
                     left = partial_files(out)
                     if left:
@@ -775,7 +838,8 @@ class Test:
                     len(self.kills), index, "%d ranks, " % ranks if ranks else "",
                     "killed " + how, moment,
                     " (summary.json there)" if "summary.json" in contents else ""))
-                for p in inspect(folder, contents, ref):
+                for p in inspect(folder, contents, ref) + \
+                        parts_checks(before, contents, resume, True, None):
                     self.fail("after kill %d (%s of %s): %s" % (len(self.kills), at[0], at[1],
                                                                 p), engine)
                 resume = True

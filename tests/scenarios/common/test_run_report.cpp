@@ -347,3 +347,58 @@ TEST_F(RunReport, ResumedRunRecordsEveryPartAndTheirTotalWallTime) {
   EXPECT_EQ(read_text(opts.out_dir + "/summary.json").find("earlier_parts"), std::string::npos);
   EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
 }
+
+namespace {
+
+// A driver that reports progress once, keeps the parts file as a kill at that moment would
+// leave it (parts_at_kill.jsonl beside its folder), and completes.
+void driver_with_progress(const SceneFile&, const RunOptions& opts) {
+  fs::create_directories(opts.out_dir);
+  note_outputs_begun(opts);
+  report_progress("stage 1 of 2 done");
+  fs::copy_file(opts.out_dir + "/run_parts.jsonl", opts.out_dir + "/../parts_at_kill.jsonl",
+                fs::copy_options::overwrite_existing);
+  Json summary = Json::object();
+  summary["scene"] = "progress_test";
+  write_scene_summary(opts, summary);
+}
+
+}  // namespace
+
+// A part killed outright (SIGKILL, the machine stopping) cannot write its record as it ends: a
+// long study keeps an "interrupted" line for itself at each progress report, and the resume
+// after the kill counts that part's wall time to its last report. A part that ends by itself
+// leaves no such line behind.
+TEST_F(RunReport, PartKilledAfterAProgressReportIsCountedWhenTheRunResumes) {
+  const SceneEntry entry{"progress_test", "reports progress once", driver_with_progress};
+  const std::string base = dir_ + "/out_killed";
+  RunOptions opts;
+  opts.out_dir = base + "/run";
+  opts.progress = false, opts.charts = false;
+  run_scene(entry, scene(), opts);
+  EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));  // complete: nothing left
+  EXPECT_EQ(read_text(opts.out_dir + "/summary.json").find("earlier_parts"), std::string::npos);
+  const std::string at_kill = read_text(base + "/parts_at_kill.jsonl");
+  EXPECT_EQ(std::count(at_kill.begin(), at_kill.end(), '\n'), 1) << at_kill;
+  EXPECT_NE(at_kill.find("\"status\": \"interrupted\""), std::string::npos) << at_kill;
+  EXPECT_NE(at_kill.find("stage 1 of 2 done"), std::string::npos) << at_kill;
+
+  // The folder as a kill after that report leaves it: the parts file, no summary.
+  fs::remove(opts.out_dir + "/summary.json");
+  fs::copy_file(base + "/parts_at_kill.jsonl", opts.out_dir + "/run_parts.jsonl");
+  opts.resume = true;
+  run_scene(entry, scene(), opts);
+  EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
+  const std::string js = read_text(opts.out_dir + "/summary.json");
+  const auto at = js.find("\"earlier_parts\"");
+  ASSERT_NE(at, std::string::npos) << js;
+  EXPECT_NE(js.find("\"status\": \"interrupted\"", at), std::string::npos) << js;
+  std::smatch m;
+  const std::string tail = js.substr(js.find("\"run\": {"));
+  ASSERT_TRUE(std::regex_search(tail, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  const double last = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(js, m, std::regex("\"wall_time_all_parts_s\": ([0-9.eE+-]+)")));
+  const double all = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(at_kill, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  EXPECT_NEAR(all, last + std::stod(m[1]), 1e-6 * all + 1e-12);
+}
