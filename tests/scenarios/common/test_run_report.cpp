@@ -97,6 +97,24 @@ class RunReport : public ::testing::Test {
 };
 std::string RunReport::dir_, RunReport::scene_path_;
 
+// summary.json (`js`) of a run made of two parts: its earlier_parts holds the first part, with
+// `status`, and wall_time_all_parts_s is the second part's wall time plus the first's (its
+// line of run_parts.jsonl, `parts`).
+void expect_earlier_part_summed(const std::string& js, const std::string& parts,
+                                const std::string& status) {
+  const auto at = js.find("\"earlier_parts\"");
+  ASSERT_NE(at, std::string::npos) << js;
+  EXPECT_NE(js.find("\"status\": \"" + status + "\"", at), std::string::npos) << js;
+  std::smatch m;
+  const std::string tail = js.substr(js.find("\"run\": {"));
+  ASSERT_TRUE(std::regex_search(tail, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  const double last = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(js, m, std::regex("\"wall_time_all_parts_s\": ([0-9.eE+-]+)")));
+  const double all = std::stod(m[1]);
+  ASSERT_TRUE(std::regex_search(parts, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
+  EXPECT_NEAR(all, last + std::stod(m[1]), 1e-6 * all + 1e-12);
+}
+
 }  // namespace
 
 TEST_F(RunReport, SummaryRecordsWallTimeAndMachine) {
@@ -325,17 +343,7 @@ TEST_F(RunReport, ResumedRunRecordsEveryPartAndTheirTotalWallTime) {
   run();
   const std::string js = read_text(opts.out_dir + "/summary.json");
   EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
-  const auto at = js.find("\"earlier_parts\"");
-  ASSERT_NE(at, std::string::npos) << js;
-  EXPECT_NE(js.find("\"status\": \"stopped\"", at), std::string::npos);
-  std::smatch m;
-  const std::string tail = js.substr(js.find("\"run\": {"));
-  ASSERT_TRUE(std::regex_search(tail, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
-  const double last = std::stod(m[1]);
-  ASSERT_TRUE(std::regex_search(js, m, std::regex("\"wall_time_all_parts_s\": ([0-9.eE+-]+)")));
-  const double all = std::stod(m[1]);
-  ASSERT_TRUE(std::regex_search(parts, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
-  EXPECT_NEAR(all, last + std::stod(m[1]), 1e-6 * all);
+  expect_earlier_part_summed(js, parts, "stopped");
 
   // A fresh run starts a new record: a parts file left in its folder is not its history.
   opts.resume = false;
@@ -390,15 +398,5 @@ TEST_F(RunReport, PartKilledAfterAProgressReportIsCountedWhenTheRunResumes) {
   run_scene(entry, scene(), opts);
   EXPECT_FALSE(fs::exists(opts.out_dir + "/run_parts.jsonl"));
   const std::string js = read_text(opts.out_dir + "/summary.json");
-  const auto at = js.find("\"earlier_parts\"");
-  ASSERT_NE(at, std::string::npos) << js;
-  EXPECT_NE(js.find("\"status\": \"interrupted\"", at), std::string::npos) << js;
-  std::smatch m;
-  const std::string tail = js.substr(js.find("\"run\": {"));
-  ASSERT_TRUE(std::regex_search(tail, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
-  const double last = std::stod(m[1]);
-  ASSERT_TRUE(std::regex_search(js, m, std::regex("\"wall_time_all_parts_s\": ([0-9.eE+-]+)")));
-  const double all = std::stod(m[1]);
-  ASSERT_TRUE(std::regex_search(at_kill, m, std::regex("\"wall_time_s\": ([0-9.eE+-]+)")));
-  EXPECT_NEAR(all, last + std::stod(m[1]), 1e-6 * all + 1e-12);
+  expect_earlier_part_summed(js, at_kill, "interrupted");
 }
