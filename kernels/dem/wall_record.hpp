@@ -4,16 +4,14 @@
 //
 // The sums are those of kernels/dem/deterministic_sum.hpp: per block of kDeterministicBlock
 // consecutive particles, in particle order, then the blocks in order. Two layouts give them:
-//  - by blocks (host backends, systems of enough blocks: WallLayout): the wall pass visits each
-//  block's particles in order in one
-//    thread and adds each contact's share to its block's row of sums as it goes; nothing is
-//    stored per particle. A per-(particle, wall) record would be 72 bytes a wall for every
-//    particle, most of which touch no wall (288 bytes a particle in the peer's walled box of
-//    two walls, docs/perf_design_notes.md, CPUs).
+//  - by blocks (host backends, systems of enough blocks: WallLayout): the wall pass visits
+//    each block's particles in order in one thread and adds each contact's share to its
+//    block's row of sums as it goes; nothing is stored per particle. A per-(particle, wall)
+//    record would be 72 bytes a wall for every particle, most of which touch no wall (288
+//    bytes a particle in the peer's walled box of two walls, docs/perf_design_notes.md, CPUs).
 //  - by rows (devices, small systems, and the host on request): the pass runs one thread per
-//  particle and
-//    writes each contact's share to the particle's row; the block sums are taken from the
-//    rows when asked for.
+//    particle and writes each contact's share to the particle's row; the block sums are taken
+//    from the rows when asked for.
 // Both add the same numbers in the same order to a sum that starts at +0: a block's sum over
 // its touching rows only is its sum over all rows, since adding +0 changes no sum that
 // started at +0 (such a sum is never -0). The same bits either way (tests/kernels/dem/
